@@ -1,0 +1,56 @@
+"""Reading poses out of configuration values."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from fleet_async.core.geometry import Pose
+
+__all__ = ["pose_from_config"]
+
+
+def pose_from_config(value: Any, yaw: Any = None, *, field_name: str = "pose") -> Pose:
+    """Turn a config value into a Pose.
+
+    Accepts a Pose, ``[x, y, z]`` (with optional ``yaw`` in radians), or a mapping with
+    ``position`` plus either ``orientation`` (quaternion x, y, z, w) or ``yaw``.
+
+    Raises:
+        ValueError: naming ``field_name`` and the bad value.
+    """
+    try:
+        return _pose_from_config(value, yaw, field_name)
+    except ValueError as exc:
+        message = str(exc)
+        if message.startswith(field_name):
+            raise
+        raise ValueError(f"{field_name}: {message}") from None
+
+
+def _pose_from_config(value: Any, yaw: Any, field_name: str) -> Pose:
+    if isinstance(value, Pose):
+        if yaw is not None:
+            raise ValueError(f"{field_name}: 'yaw' cannot be combined with a Pose object")
+        return value
+    if isinstance(value, dict):
+        unknown = set(value) - {"position", "orientation", "yaw"}
+        if unknown:
+            raise ValueError(
+                f"{field_name}: unknown key(s) {sorted(unknown)}; expected position, orientation or yaw"
+            )
+        position = value.get("position", [0.0, 0.0, 0.0])
+        if "orientation" in value:
+            if "yaw" in value or yaw is not None:
+                raise ValueError(f"{field_name}: give either 'orientation' or 'yaw', not both")
+            return Pose(position, value["orientation"])
+        return _pose_from_config(position, value.get("yaw", yaw), field_name)
+    if isinstance(value, (list, tuple)):
+        if yaw is None:
+            return Pose(list(value))
+        if isinstance(yaw, bool) or not isinstance(yaw, (int, float)) or not math.isfinite(yaw):
+            raise ValueError(f"{field_name}.yaw: expected a finite number (radians), got {yaw!r}")
+        if len(value) != 3:
+            raise ValueError(f"{field_name}: expected [x, y, z], got {value!r}")
+        return Pose.from_euler(*value, yaw=float(yaw))
+    raise ValueError(f"{field_name}: expected a Pose, [x, y, z] or a mapping, got {value!r}")
