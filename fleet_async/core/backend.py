@@ -149,7 +149,9 @@ class PyBulletBackend:
         reset = p.resetBasePositionAndOrientation
         positions = store.position[rows].tolist()
         orientations = store.orientation[rows].tolist()
-        for body, pos, orn in zip(store.body_id[rows].tolist(), positions, orientations):
+        for body, pos, orn in zip(
+            store.body_id[rows].tolist(), positions, orientations, strict=True
+        ):
             if body >= 0:
                 reset(body, pos, orn, physicsClientId=cid)
         store.dirty[rows] = False

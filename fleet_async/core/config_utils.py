@@ -78,17 +78,15 @@ def load_yaml_config(config_path: PathLike) -> dict[str, Any]:
 def merge_configs(
     base_config: Mapping[str, Any], override_config: Mapping[str, Any]
 ) -> dict[str, Any]:
-    """Recursively merge two configuration mappings without modifying either.
+    """Recursively merge two config mappings into a new dict, modifying neither.
 
-    Where both sides hold a mapping under the same key, the mappings are merged; otherwise the
-    override's value wins, including lists (replaced, not concatenated) and ``None``.
+    Mappings under the same key are merged; otherwise the override's value wins, including lists
+    (replaced, not concatenated) and ``None``. The result shares no mutable values with the
+    inputs.
 
     Args:
         base_config: Defaults.
         override_config: Values taking precedence.
-
-    Returns:
-        A new dict sharing no mutable values with the inputs.
     """
     merged = copy.deepcopy(dict(base_config))
     for key, value in override_config.items():
@@ -100,13 +98,10 @@ def merge_configs(
 
 
 def load_config(config_paths: PathLike | Sequence[PathLike]) -> dict[str, Any]:
-    """Load one or more YAML files and merge them, later files overriding earlier ones.
+    """Load YAML files with :func:`load_yaml_config` and merge them, later ones winning.
 
     Args:
         config_paths: A path, or a list of paths (``[]`` gives ``{}``).
-
-    Returns:
-        The merged configuration.
 
     Raises:
         FileNotFoundError, ValueError: As :func:`load_yaml_config`, for the first bad file.
@@ -218,7 +213,9 @@ def dataclass_from_dict(
                 kwargs[name] = value
                 continue
         if field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
-            raise ValueError(f"{where}{label}: missing required key {key_of.get(name, name)!r}")
+            key = key_of.get(name, name)
+            of_field = "" if key == name else f" (field {name!r})"
+            raise ValueError(f"{where}{label}: missing required key {key!r}{of_field}")
     try:
         return cls(**kwargs)
     except ValueError as exc:
@@ -261,9 +258,10 @@ def forward_spawn_params(
     for name in aliases:
         if name not in field_names:
             raise ValueError(f"aliases: {name!r} is not a field of {type(spawn_params).__name__}")
-    params = inspect.signature(factory_method).parameters.values()
-    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params)
-    accepted = {p.name for p in params if p.kind is not inspect.Parameter.VAR_POSITIONAL}
+    kinds = {p.name: p.kind for p in inspect.signature(factory_method).parameters.values()}
+    takes_any = inspect.Parameter.VAR_KEYWORD in kinds.values()
+    by_name = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    accepted = {name for name, kind in kinds.items() if kind in by_name}
     kwargs = {
         aliases.get(name, name): getattr(spawn_params, name)
         for name in field_names
@@ -345,7 +343,8 @@ def _check(value: Any, hint: Any, path: str, source: PathLike | None) -> Any:
 def _check_yaml_value(value: Any, hint: Any, path: str, source: PathLike | None) -> Any:
     kind, args = typing.get_origin(hint) or hint, typing.get_args(hint)
     if kind in _SCALARS:
-        if isinstance(value, bool) is not (kind is bool) or not isinstance(value, _SCALARS[kind]):
+        fits = isinstance(value, _SCALARS[kind]) and isinstance(value, bool) is (kind is bool)
+        if not fits:
             return _mismatch(value, hint, path, source)
         return float(value) if kind is float else value
     if kind in (list, tuple, Sequence):

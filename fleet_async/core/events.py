@@ -42,7 +42,7 @@ class SimEvents:
     AGENT_REMOVED = "agent_removed"
     """An agent left (emitted after OBJECT_REMOVED); payload ``sim``, ``agent``."""
     COLLISION_STARTED = "collision_started"
-    """A pair began touching; payload ``sim``, ``obj_a``, ``obj_b`` (and ``other`` on entity buses)."""
+    """A pair began touching; payload ``sim``, ``obj_a``, ``obj_b`` (entity buses: ``other``)."""
     COLLISION_ENDED = "collision_ended"
     """A pair stopped touching; same payload as COLLISION_STARTED."""
     PRE_UPDATE = "pre_update"
@@ -67,7 +67,7 @@ class EventBus:
 
     Args:
         on_error: ``"raise"`` (default) re-raises a handler's exception to the emitter, with a
-            note naming the handler and the event; ``"log"`` logs it with the traceback and carries on
+            note naming the handler and the event; ``"log"`` logs it with the traceback and goes on
             with the remaining handlers.
 
     Raises:

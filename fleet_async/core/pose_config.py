@@ -37,7 +37,8 @@ def _pose_from_config(value: Any, yaw: Any, field_name: str) -> Pose:
         unknown = set(value) - {"position", "orientation", "yaw"}
         if unknown:
             raise ValueError(
-                f"{field_name}: unknown key(s) {sorted(unknown)}; expected position, orientation or yaw"
+                f"{field_name}: unknown key(s) {sorted(unknown)}; "
+                "expected position, orientation or yaw"
             )
         position = value.get("position", [0.0, 0.0, 0.0])
         if "orientation" in value:
@@ -52,5 +53,6 @@ def _pose_from_config(value: Any, yaw: Any, field_name: str) -> Pose:
             raise ValueError(f"{field_name}.yaw: expected a finite number (radians), got {yaw!r}")
         if len(value) != 3:
             raise ValueError(f"{field_name}: expected [x, y, z], got {value!r}")
-        return Pose.from_euler(*value, yaw=float(yaw))
+        x, y, z = value
+        return Pose.from_euler(x, y, z, yaw=float(yaw))
     raise ValueError(f"{field_name}: expected a Pose, [x, y, z] or a mapping, got {value!r}")

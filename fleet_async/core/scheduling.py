@@ -101,6 +101,6 @@ class PeriodicSchedule:
                 entry.last_time = now
             elif now + _EPS >= (entry.count + 1) * entry.period:
                 out.append((entry.callback, now - entry.last_time))
-                entry.count = int(math.floor((now + _EPS) / entry.period))
+                entry.count = math.floor((now + _EPS) / entry.period)
                 entry.last_time = now
         return out

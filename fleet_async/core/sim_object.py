@@ -123,7 +123,10 @@ class SimObject:
         self._refresh_log_prefix()
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}(object_id={self.object_id}, name={self.name!r}, body_id={self.body_id})"
+        return (
+            f"{type(self).__name__}(object_id={self.object_id}, name={self.name!r}, "
+            f"body_id={self.body_id})"
+        )
 
     # ----- binding to a simulation (called by MultiRobotSimulationCore) -------------------
 
@@ -272,7 +275,7 @@ class SimObject:
     def detach_object(
         self, obj: SimObject, drop_pose: Pose | None = None, drop_relative_pose: Pose | None = None
     ) -> bool:
-        """Detach ``obj``; optionally place it at ``drop_pose`` or offset it by ``drop_relative_pose``.
+        """Detach ``obj``; optionally put it at ``drop_pose`` or offset by ``drop_relative_pose``.
 
         Returns:
             True if ``obj`` was attached to this object, False (with a warning) otherwise.

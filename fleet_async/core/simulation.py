@@ -5,7 +5,7 @@ phases in order, each a call into the module that owns it:
 
 1. ``events_pre_step``  - PRE_STEP event.
 2. ``callbacks``        - simulation callbacks, plugins and per-object callbacks that are due.
-3. ``agent_update``     - PRE_UPDATE, every motion system and overridden ``update(dt)``, POST_UPDATE.
+3. ``agent_update``     - PRE_UPDATE, motion systems and overridden ``update(dt)``, POST_UPDATE.
 4. ``attachments``      - attached objects follow their parent links.
 5. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
 6. ``events_post_step`` - the clock advances, the GUI is synced, POST_STEP event.
@@ -303,7 +303,8 @@ class MultiRobotSimulationCore:
             plugin = plugin_or_cls
         else:
             raise TypeError(
-                f"register_plugin: expected a SimPlugin or SimPlugin subclass, got {plugin_or_cls!r}"
+                "register_plugin: expected a SimPlugin or SimPlugin subclass, "
+                f"got {plugin_or_cls!r}"
             )
         freq = frequency if frequency is not None else plugin.frequency
         self._plugin_schedule.add(
@@ -415,7 +416,7 @@ class MultiRobotSimulationCore:
         self._profiler.record(name, value_ms)
 
     def get_memory_usage(self) -> dict[str, float] | None:
-        """``{"current_mb", "peak_mb"}`` of the Python heap, or None unless memory profiling is on."""
+        """``{"current_mb", "peak_mb"}`` of the Python heap; None unless memory profiling is on."""
         return self._memory.usage()
 
     def sync_pybullet(self) -> int:
@@ -572,7 +573,10 @@ class MultiRobotSimulationCore:
         camera_config: dict[str, Any] | None = None,
         entity_positions: Sequence[Sequence[float]] | None = None,
     ) -> tuple[float, float, float, list[float]]:
-        """Frame the camera on the scene (or ``entity_positions``); returns (distance, yaw, pitch, target).
+        """Frame the camera on the scene or ``entity_positions``.
+
+        Returns:
+            (distance, yaw, pitch, target) of the view.
 
         The view is computed headless too (recorders use it); it is applied only with a GUI.
         """

@@ -178,12 +178,13 @@ def _body_info(body_id: int, client: int) -> tuple[int, str]:
 def _checked_index(index: object, low: int, count: int, kind: str, body_id: int) -> int:
     if isinstance(index, bool) or not isinstance(index, numbers.Integral):
         raise TypeError(f"{kind}: expected an int index or a name, got {index!r}")
-    if not low <= index < count:
+    value = int(index)
+    if not low <= value < count:
         raise ValueError(
-            f"{kind} index {index} out of range [{low}, {count}) for body {body_id} "
+            f"{kind} index {value} out of range [{low}, {count}) for body {body_id} "
             f"with {count} joints"
         )
-    return int(index)
+    return value
 
 
 def calculate_offset_pose(

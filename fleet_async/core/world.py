@@ -137,13 +137,13 @@ class World:
             owner = "this" if obj.sim_core is self._sim else "another"
             raise ValueError(f"add_object: {obj!r} already belongs to {owner} simulation")
         body = obj.body_id
+        pos: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
+        orn: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0, 1.0)
         if body >= 0:
             pos, orn = self._backend.read_pose(body)
         elif obj.state_row >= 0:
             pose = obj.get_pose()
             pos, orn = pose.position, pose.orientation
-        else:
-            pos, orn = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
         dynamic = self._physics and obj.mass > 0
         object_id = self._next_id
         self._next_id += 1
@@ -342,7 +342,8 @@ class World:
             )
         if joint_type != p.JOINT_FIXED:
             raise ValueError(
-                f"attach_object: joint_type {joint_type!r} unsupported; only pybullet.JOINT_FIXED (4)"
+                f"attach_object: joint_type {joint_type!r} is not supported; "
+                "only pybullet.JOINT_FIXED (4) is"
             )
         link_index = (
             resolve_link_index(parent.body_id, link, physics_client_id=self._backend.client)

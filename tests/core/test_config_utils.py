@@ -87,7 +87,7 @@ def test_load_yaml_config_parses_mapping(tmp_path: Path) -> None:
 def test_load_yaml_config_missing_file_names_the_path(tmp_path: Path) -> None:
     missing = tmp_path / "nope.yaml"
 
-    with pytest.raises(FileNotFoundError, match="nope.yaml"):
+    with pytest.raises(FileNotFoundError, match=r"nope\.yaml"):
         load_yaml_config(missing)
 
 
@@ -162,7 +162,7 @@ def test_load_config_later_files_override_earlier(tmp_path: Path) -> None:
 def test_load_config_missing_file_raises(tmp_path: Path) -> None:
     base = _write(tmp_path, "base.yaml", "a: 1\n")
 
-    with pytest.raises(FileNotFoundError, match="missing.yaml"):
+    with pytest.raises(FileNotFoundError, match=r"missing\.yaml"):
         load_config([base, tmp_path / "missing.yaml"])
 
 
@@ -181,12 +181,12 @@ def test_resolve_class_rejects_non_dotted(bad: str) -> None:
 
 
 def test_resolve_class_missing_module_names_the_path() -> None:
-    with pytest.raises(ModuleNotFoundError, match="no_such_pkg_xyz.Thing"):
+    with pytest.raises(ModuleNotFoundError, match=r"no_such_pkg_xyz\.Thing"):
         resolve_class("no_such_pkg_xyz.Thing")
 
 
 def test_resolve_class_missing_attribute_names_the_path() -> None:
-    with pytest.raises(AttributeError, match="collections.NoSuchClass"):
+    with pytest.raises(AttributeError, match=r"collections\.NoSuchClass"):
         resolve_class("collections.NoSuchClass")
 
 
@@ -353,7 +353,7 @@ def test_dataclass_from_dict_checks_container_items_and_names_them() -> None:
 
 
 def test_dataclass_from_dict_hints_at_yaml_exponent_strings() -> None:
-    with pytest.raises(ValueError, match="1.0e-3"):
+    with pytest.raises(ValueError, match=r"1\.0e-3"):
         dataclass_from_dict(Params, {"speed": "1e-3"})
 
 
@@ -491,3 +491,16 @@ def test_forward_spawn_params_errors() -> None:
         forward_spawn_params(Factory.from_urdf, Spawn)
     with pytest.raises(ValueError, match="'pose_typo' is not a field of Spawn"):
         forward_spawn_params(Factory.from_urdf, Spawn(), aliases={"pose_typo": "pose"})
+
+
+def test_forward_spawn_params_skips_positional_only_parameters() -> None:
+    def factory(urdf_path: str, /, mass: float = 0.0) -> None:
+        del urdf_path, mass
+
+    assert forward_spawn_params(factory, Spawn()) == {"mass": 1.0}
+
+
+def test_dataclass_from_dict_missing_aliased_field_names_key_and_field() -> None:
+    with pytest.raises(ValueError, match=r"missing required key 'id' \(field 'robot_id'\)"):
+        dataclass_from_dict(Required, {}, aliases={"robot_id": "id"}, source="r.yaml")
+    assert dataclass_from_dict(Required, {"id": "r7"}, aliases={"robot_id": "id"}).robot_id == "r7"

@@ -364,7 +364,9 @@ def test_disabled_objects_make_no_physics_contact():
         ghost.set_collision_mode(CollisionMode.NORMAL_2D)
         other.set_pose(Pose.from_xyz(0, 0, ghost.get_pose().z + 0.15))
         psim.step_once()
-        assert len(p.getContactPoints(ghost.body_id, other.body_id, physicsClientId=psim.client)) > 0
+        assert (
+            len(p.getContactPoints(ghost.body_id, other.body_id, physicsClientId=psim.client)) > 0
+        )
 
 
 def test_object_callbacks_run_at_their_frequency(sim):
@@ -427,7 +429,7 @@ def _scenario_trace(seed):
 def test_same_seed_gives_identical_poses_step_by_step():
     first, second = _scenario_trace(3), _scenario_trace(3)
     assert len(first) == len(second) == 200
-    for (pos_a, orn_a), (pos_b, orn_b) in zip(first, second):
+    for (pos_a, orn_a), (pos_b, orn_b) in zip(first, second, strict=True):
         assert np.array_equal(pos_a, pos_b) and np.array_equal(orn_a, orn_b)
     other = _scenario_trace(4)
     assert not np.array_equal(first[-1][0], other[-1][0])

@@ -328,7 +328,7 @@ def test_batch_spawn_and_scene_bounds(sim):
             box(sim, x=i, y=2 * i, z=0.5)
     center, extent = sim.compute_scene_bounds()
     assert center == [1.5, 3.0, 0.5] and extent == [3.0, 6.0, 0.0]
-    distance, yaw, pitch, target = sim.setup_camera({"camera_view_type": "top_down"})
+    distance, _yaw, pitch, target = sim.setup_camera({"camera_view_type": "top_down"})
     assert target == center and pitch == -89.9 and distance > 0
     with pytest.raises(ValueError, match="camera_zoom"):
         sim.setup_camera({"camera_zoom": 2})
@@ -351,3 +351,19 @@ def test_from_dict_and_from_yaml(tmp_path):
         core.close()
     with pytest.raises(ValueError, match="entities"):
         MultiRobotSimulationCore.from_dict({"simulation": {"gui": False}, "entities": []})
+
+
+def test_time_profiling_logs_a_summary_every_interval(caplog):
+    params = headless_params(enable_time_profiling=True, profiling_interval=5, log_level="info")
+    with (
+        MultiRobotSimulationCore(params) as psim,
+        caplog.at_level(logging.INFO, logger="fleet_async.core.profiling"),
+    ):
+        for _ in range(10):
+            psim.step_once()
+    summaries = [r for r in caplog.records if "step profile" in r.getMessage()]
+    assert len(summaries) == 2
+    assert (
+        "over 10 steps" in summaries[-1].getMessage()
+        and "agent_update=" in summaries[-1].getMessage()
+    )
