@@ -4,6 +4,18 @@ Nothing in ``fleet_async.core`` imports ``fleet_async.tasks``; the async mission
 top of this package and never inside it.
 """
 
+from fleet_async.core.action import (
+    DEFAULT_EE_TOLERANCE,
+    DEFAULT_JOINT_TOLERANCE,
+    DEFAULT_MAX_FORCE,
+    DEFAULT_MOVE_SKIP_THRESHOLD,
+    Action,
+    MoveAction,
+    WaitAction,
+)
+from fleet_async.core.agent import Agent
+from fleet_async.core.agent_params import AgentSpawnParams, IKParams
+from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin
 from fleet_async.core.config_utils import (
     dataclass_from_dict,
     forward_spawn_params,
@@ -11,6 +23,17 @@ from fleet_async.core.config_utils import (
     load_yaml_config,
     merge_configs,
     resolve_class,
+)
+from fleet_async.core.controllers import (
+    Controller,
+    ControllerParams,
+    DifferentialController,
+    KinematicController,
+    OmniController,
+    PatrolController,
+    RandomWalkController,
+    create_controller,
+    register_controller,
 )
 from fleet_async.core.events import EventBus, SimEvents
 from fleet_async.core.geometry import Path, Pose
@@ -21,8 +44,17 @@ from fleet_async.core.logging_utils import (
     get_named_lazy_logger,
     wrap_existing_logger,
 )
+from fleet_async.core.models import (
+    add_model_search_path,
+    list_model_search_paths,
+    list_models,
+    register_model,
+    remove_model_search_path,
+    resolve_model,
+)
 from fleet_async.core.monitor import DataMonitor
 from fleet_async.core.params import SimulationParams
+from fleet_async.core.pick_drop import DropAction, PickAction
 from fleet_async.core.plugins import SimPlugin
 from fleet_async.core.shapes import ShapeParams
 from fleet_async.core.sim_object import SimObject
@@ -43,23 +75,43 @@ from fleet_async.core.types import (
 )
 
 __all__ = [
+    "DEFAULT_EE_TOLERANCE",
+    "DEFAULT_JOINT_TOLERANCE",
+    "DEFAULT_MAX_FORCE",
+    "DEFAULT_MOVE_SKIP_THRESHOLD",
+    "Action",
     "ActionStatus",
+    "Agent",
+    "AgentPlugin",
+    "AgentSpawnParams",
+    "BatteryPlugin",
     "CollisionDetectionMethod",
     "CollisionMode",
+    "Controller",
     "ControllerMode",
+    "ControllerParams",
     "DataMonitor",
+    "DifferentialController",
     "DoorState",
+    "DropAction",
     "DropPhase",
     "EventBus",
+    "IKParams",
+    "KinematicController",
     "LazyLogger",
     "MotionMode",
+    "MoveAction",
     "MovementDirection",
     "MultiRobotSimulationCore",
     "NamedLazyLogger",
+    "OmniController",
     "Path",
+    "PatrolController",
+    "PickAction",
     "PickPhase",
     "Pose",
     "PosePhase",
+    "RandomWalkController",
     "ShapeParams",
     "SimEvents",
     "SimObject",
@@ -67,13 +119,22 @@ __all__ = [
     "SimPlugin",
     "SimulationParams",
     "SpatialHashCellSizeMode",
+    "WaitAction",
+    "add_model_search_path",
+    "create_controller",
     "dataclass_from_dict",
     "forward_spawn_params",
     "get_lazy_logger",
     "get_named_lazy_logger",
+    "list_model_search_paths",
+    "list_models",
     "load_config",
     "load_yaml_config",
     "merge_configs",
+    "register_controller",
+    "register_model",
+    "remove_model_search_path",
     "resolve_class",
+    "resolve_model",
     "wrap_existing_logger",
 ]

@@ -67,6 +67,8 @@ class SimObject:
         collision_mode: How it takes part in collision detection.
         name: Human-readable name (duplicates allowed).
         user_data: Free-form metadata.
+        register: Join ``sim_core`` now (subclasses pass False and call ``add_object`` once
+            their own state is ready).
 
     Attributes:
         object_id: Unique id assigned by the simulation (-1 while standalone).
@@ -96,6 +98,8 @@ class SimObject:
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
         name: str | None = None,
         user_data: dict[str, Any] | None = None,
+        *,
+        register: bool = True,
     ) -> None:
         self.body_id = int(body_id)
         self.object_id = -1
@@ -110,7 +114,8 @@ class SimObject:
         self._row = -1  # no row until bound to a simulation or given a standalone store
         if sim_core is not None:
             self.mass = float(mass) if mass is not None else sim_core.body_mass(self.body_id)
-            sim_core.add_object(self)
+            if register:  # subclasses that finish their own setup first pass False and add later
+                sim_core.add_object(self)
         else:
             self.mass = float(mass) if mass is not None else self._standalone_mass()
             self._store = KinematicState(1)
@@ -139,6 +144,9 @@ class SimObject:
         self._row = row
         self.object_id = object_id
         self._refresh_log_prefix()
+
+    def on_removed(self) -> None:
+        """Called by the simulation just before the object leaves it (subclass hook)."""
 
     def unbind(self) -> None:
         """Leave the simulation, keeping the last pose in a private row."""

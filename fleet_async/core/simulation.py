@@ -29,6 +29,7 @@ from fleet_async.core.attachments import AttachmentSet
 from fleet_async.core.backend import PyBulletBackend
 from fleet_async.core.config_utils import load_yaml_config
 from fleet_async.core.events import EventBus, SimEvents
+from fleet_async.core.fleet import FleetMotion
 from fleet_async.core.monitor import DataMonitor, SimulationMonitor
 from fleet_async.core.params import SimulationParams
 from fleet_async.core.plugins import SimPlugin
@@ -79,11 +80,12 @@ class MultiRobotSimulationCore:
         self._backend = PyBulletBackend(self._params)
         self._backend.connect()
         self._world = World(self, self._backend, self.events, self._params.physics)
+        self._fleet = FleetMotion(self)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
         self._managers: list[Any] = []
-        self._motion_systems: list[MotionSystem] = []
+        self._motion_systems: list[MotionSystem] = [self._fleet]
         self._step_count = 0
         self._collision_count = 0
         self._paused = False
@@ -155,6 +157,11 @@ class MultiRobotSimulationCore:
         return self._world.store
 
     @property
+    def fleet(self) -> FleetMotion:
+        """Agents' motion: the kinematic engine, action queues and per-agent controllers."""
+        return self._fleet
+
+    @property
     def world(self) -> World:
         """Objects, rows and attachments (what SimObject handles call back into)."""
         return self._world
@@ -219,13 +226,17 @@ class MultiRobotSimulationCore:
 
     # ----- objects ------------------------------------------------------------------------
 
-    def add_object(self, obj: SimObject) -> None:
+    def add_object(self, obj: SimObject, notify: bool = True) -> None:
         """Register ``obj`` (``SimObject.__init__`` does this when given ``sim_core``).
+
+        Args:
+            obj: The object.
+            notify: Emit the spawn events now (else ``sim.world.announce(obj)`` does later).
 
         Raises:
             ValueError: if ``obj`` already belongs to this or another simulation.
         """
-        self._world.add(obj)
+        self._world.add(obj, notify)
 
     def remove_object(self, obj: SimObject) -> None:
         """Remove ``obj`` from the simulation, its managers and PyBullet.
@@ -474,6 +485,7 @@ class MultiRobotSimulationCore:
         generator is reseeded with ``seed``, or with ``params.seed``.
         """
         removed = self._world.clear()
+        self._fleet.reset()
         for manager in self._managers:
             manager.clear()
         self._backend.reset_world()

@@ -127,7 +127,7 @@ class World:
         self._store.clear()
         return removed
 
-    def add(self, obj: SimObject) -> None:
+    def add(self, obj: SimObject, notify: bool = True) -> None:
         """Register ``obj`` (``SimObject.__init__`` does this when given ``sim_core``).
 
         Raises:
@@ -167,6 +167,11 @@ class World:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
             p.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self._backend.client)
+        if notify:
+            self.announce(obj)
+
+    def announce(self, obj: SimObject) -> None:
+        """Emit the spawn events of ``obj`` (``add`` does it unless told not to)."""
         self._events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
         if obj.spawned_event is not None:
             self._events.emit(obj.spawned_event, sim=self._sim, agent=obj)
@@ -184,6 +189,7 @@ class World:
             self.detach(parent, obj, None, None)
         for child in obj.get_attached_objects():
             self.detach(obj, child, None, None)
+        obj.on_removed()
         object_id, row = obj.object_id, obj.state_row
         for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
             registry.pop(object_id, None)

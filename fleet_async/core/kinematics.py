@@ -1,0 +1,441 @@
+"""Vectorised kinematic motion for every agent on a built-in (omni / differential) controller.
+
+Each agent on a built-in controller owns one *slot* of this engine. A slot follows its path one
+*segment* at a time; a segment moves the body from a start pose to a target pose along a
+straight line while slerping its orientation, both driven by one normalised progress
+``u`` in [0, 1] with a trapezoidal rate profile. The profile's limits are chosen per segment so
+that neither the linear (m/s, m/s^2) nor the angular (rad/s, rad/s^2) limits are exceeded:
+
+    du/dt    <= min(v_max_along / L, w_max_about / theta)
+    d2u/dt2  <= min(a_max_along / L, alpha_max_about / theta)
+
+A differential robot's path becomes ROTATE segments (L = 0, turn to face the next waypoint) and
+FORWARD segments (theta = 0, drive straight). An omnidirectional robot translates and rotates
+at once. Every segment starts and ends at rest and ends exactly on its target.
+
+``advance(dt)`` integrates all moving slots with numpy in one pass. Python runs only when a
+segment ends (to plan the next one), never per robot per step.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fleet_async.core.geometry import (
+    Pose,
+    quat_angle_between,
+    quat_from_euler,
+    quat_multiply,
+    quat_slerp_batch,
+    yaw_from_quats,
+)
+from fleet_async.core.state import KinematicState
+from fleet_async.core.types import MovementDirection
+
+__all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine", "MotionLimits"]
+
+KIND_OMNI = 0
+KIND_DIFFERENTIAL = 1
+_IDLE, _VELOCITY, _POSE = 0, 1, 2
+_EPS_LEN = 1e-9  # m: shorter segments are skipped
+_EPS_ANGLE = 1e-9  # rad: smaller rotations are skipped
+
+
+@dataclass(frozen=True)
+class MotionLimits:
+    """Kinematic limits of one agent; each is a scalar (Euclidean) or per-axis (x, y, z)."""
+
+    max_linear_vel: float | tuple[float, float, float]
+    max_linear_accel: float | tuple[float, float, float]
+    max_angular_vel: float | tuple[float, float, float]
+    max_angular_accel: float | tuple[float, float, float]
+
+
+def _heading(
+    direction: MovementDirection, pos: np.ndarray, orn: np.ndarray, target: np.ndarray
+) -> np.ndarray | None:
+    """Orientation a differential robot turns to before driving to ``target`` (None: no turn)."""
+    dx, dy = float(target[0] - pos[0]), float(target[1] - pos[1])
+    if math.hypot(dx, dy) < _EPS_LEN:
+        return None
+    yaw = math.atan2(dy, dx)
+    if direction is MovementDirection.AUTO:
+        current = float(yaw_from_quats(orn[None, :])[0])
+        off = abs((yaw - current + math.pi) % (2 * math.pi) - math.pi)
+        direction = MovementDirection.BACKWARD if off > math.pi / 2 else MovementDirection.FORWARD
+    if direction is MovementDirection.BACKWARD:
+        yaw += math.pi
+    return quat_from_euler(0.0, 0.0, yaw)
+
+
+def _axis_cap(limit: np.ndarray, scalar: bool, direction: np.ndarray) -> float:
+    """Largest magnitude along unit ``direction`` allowed by a scalar or per-axis limit."""
+    if scalar:
+        return float(limit[0])
+    ratios = np.abs(direction) / limit
+    worst = float(ratios.max())
+    return math.inf if worst == 0.0 else 1.0 / worst
+
+
+_NONE, _TURNED, _DRIVING = 0, 1, 2  # progress toward the plan's next waypoint
+
+
+@dataclass
+class _Plan:
+    waypoints: deque[Pose]
+    direction: MovementDirection
+    final_align: bool
+    final_orientation: np.ndarray
+    total: int
+    stage: int = _NONE
+    aligned: bool = False
+
+
+class KinematicEngine:
+    """Moves every slot's row of the state store by its path or velocity command.
+
+    Args:
+        store: The simulation's state store.
+        on_motion_end: Called ``(slot, reached)`` when a slot stops: ``reached`` is True when it
+            finished its path, False when stopped or replaced.
+    """
+
+    def __init__(self, store: KinematicState, on_motion_end: Callable[[int, bool], None]) -> None:
+        self._store = store
+        self._on_motion_end = on_motion_end
+        self._free: list[int] = []
+        self._high = 0
+        self._plans: list[_Plan | None] = []
+        self._alloc(16)
+
+    # ----- slots --------------------------------------------------------------------------
+
+    def _alloc(self, cap: int) -> None:
+        def grow(name: str, shape: tuple[int, ...], dtype: type, fill: float) -> None:
+            new = np.full((cap, *shape), fill, dtype=dtype)
+            old = getattr(self, name, None)
+            if old is not None:
+                new[: len(old)] = old
+            setattr(self, name, new)
+
+        grow("row", (), np.int64, -1)
+        grow("kind", (), np.int8, 0)
+        grow("mode", (), np.int8, _IDLE)
+        for name in ("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"):
+            grow(name, (3,), np.float64, 0.0)
+        for name in ("q0", "q1"):
+            grow(name, (4,), np.float64, 0.0)
+        for name in ("u", "du", "u_vmax", "u_amax", "theta", "sl_dot", "sl_theta", "sl_sin"):
+            grow(name, (), np.float64, 0.0)
+        grow("lin_scalar", (), np.bool_, True)
+        grow("ang_scalar", (), np.bool_, True)
+        grow("cmd", (4,), np.float64, 0.0)  # body-frame vx, vy, vz, wz
+        grow("vel", (4,), np.float64, 0.0)  # current body-frame velocity in VELOCITY mode
+        self._plans.extend([None] * (cap - len(self._plans)))
+
+    def add(self, row: int, kind: int, limits: MotionLimits) -> int:
+        """Give a store row a slot; return the slot index."""
+        if self._free:
+            slot = heapq.heappop(self._free)
+        else:
+            slot = self._high
+            self._high += 1
+            if slot >= len(self.row):
+                self._alloc(2 * len(self.row))
+        self.row[slot] = row
+        self.kind[slot] = kind
+        self.mode[slot] = _IDLE
+        self.set_limits(slot, limits)
+        self._plans[slot] = None
+        return slot
+
+    def remove(self, slot: int) -> None:
+        """Free a slot (no motion-end callback)."""
+        self.mode[slot] = _IDLE
+        self.row[slot] = -1
+        self._plans[slot] = None
+        heapq.heappush(self._free, slot)
+
+    def set_kind(self, slot: int, kind: int) -> None:
+        """Switch a slot between omni and differential (it must be idle)."""
+        self.kind[slot] = kind
+
+    def set_limits(self, slot: int, limits: MotionLimits) -> None:
+        """Replace a slot's kinematic limits (applies from the next segment)."""
+        for name, value, flag in (
+            ("vmax", limits.max_linear_vel, "lin_scalar"),
+            ("amax", limits.max_linear_accel, None),
+            ("wmax", limits.max_angular_vel, "ang_scalar"),
+            ("alpha", limits.max_angular_accel, None),
+        ):
+            arr = np.broadcast_to(np.asarray(value, dtype=float), (3,))
+            getattr(self, name)[slot] = arr
+            if flag is not None:
+                getattr(self, flag)[slot] = np.ndim(value) == 0
+
+    # ----- queries ------------------------------------------------------------------------
+
+    def is_moving(self, slot: int) -> bool:
+        """Whether the slot follows a path or a non-zero velocity command."""
+        mode = self.mode[slot]
+        if mode == _POSE:
+            return True
+        return bool(mode == _VELOCITY and (self.vel[slot].any() or self.cmd[slot].any()))
+
+    def in_velocity_mode(self, slot: int) -> bool:
+        """Whether the slot follows a velocity command."""
+        return bool(self.mode[slot] == _VELOCITY)
+
+    def remaining_waypoints(self, slot: int) -> list[Pose]:
+        """Waypoints not reached yet (the current target first)."""
+        plan = self._plans[slot]
+        return [] if plan is None else list(plan.waypoints)
+
+    def waypoint_index(self, slot: int) -> int:
+        """Index of the waypoint being approached in the path given to ``set_path``."""
+        plan = self._plans[slot]
+        if plan is None:
+            return 0
+        return min(plan.total - len(plan.waypoints), max(plan.total - 1, 0))
+
+    def goal(self, slot: int) -> Pose | None:
+        """The final pose of the current path, or None when idle."""
+        plan = self._plans[slot]
+        if plan is None:
+            return None
+        return Pose.from_arrays_unchecked(
+            self._plan_goal_position(slot, plan), plan.final_orientation.copy()
+        )
+
+    def _plan_goal_position(self, slot: int, plan: _Plan) -> np.ndarray:
+        if plan.waypoints:
+            return plan.waypoints[-1].position.copy()
+        return self.p1[slot].copy()
+
+    # ----- commands -----------------------------------------------------------------------
+
+    def set_path(
+        self,
+        slot: int,
+        waypoints: Sequence[Pose],
+        direction: MovementDirection,
+        final_orientation_align: bool,
+    ) -> None:
+        """Follow ``waypoints`` from the current pose (replacing any motion in progress)."""
+        self._interrupt(slot)
+        wps = deque(waypoints)
+        if not wps:
+            self._finish(slot, reached=True)
+            return
+        self._plans[slot] = _Plan(
+            waypoints=wps,
+            direction=direction,
+            final_align=final_orientation_align,
+            final_orientation=wps[-1].orientation.copy(),
+            total=len(wps),
+        )
+        self.mode[slot] = _POSE
+        self._plan_next(slot)
+
+    def set_velocity(self, slot: int, command: Sequence[float]) -> None:
+        """Follow a body-frame velocity command (vx, vy, vz in m/s, wz in rad/s)."""
+        if self.mode[slot] == _POSE:
+            self._interrupt(slot)
+        if self.mode[slot] != _VELOCITY:
+            self.vel[slot] = 0.0
+        self.cmd[slot] = command
+        self.mode[slot] = _VELOCITY
+
+    def stop(self, slot: int) -> None:
+        """Stop at once: no path, no command, zero velocity."""
+        self._interrupt(slot)
+        self.mode[slot] = _IDLE
+        self.cmd[slot] = 0.0
+        self.vel[slot] = 0.0
+        row = self.row[slot]
+        self._store.velocity[row] = 0.0
+        self._store.angular_velocity[row] = 0.0
+
+    def _interrupt(self, slot: int) -> None:
+        """End a path in progress without reaching it (motion-end callback, reached=False)."""
+        if self._plans[slot] is not None or self.mode[slot] == _POSE:
+            self._plans[slot] = None
+            self.mode[slot] = _IDLE
+            self.du[slot] = 0.0
+            self._on_motion_end(slot, False)
+
+    # ----- planning (Python, once per segment) ---------------------------------------------
+
+    def _plan_next(self, slot: int) -> None:
+        """Start the slot's next segment, or finish its path."""
+        plan = self._plans[slot]
+        assert plan is not None
+        row = self.row[slot]
+        differential = self.kind[slot] == KIND_DIFFERENTIAL
+        while True:
+            if plan.stage == _DRIVING:  # the segment to waypoints[0] has just ended
+                plan.waypoints.popleft()
+                plan.stage = _NONE
+            pos = self._store.position[row]
+            orn = self._store.orientation[row]
+            if plan.waypoints:
+                target = plan.waypoints[0]
+                if differential and plan.stage == _NONE:
+                    plan.stage = _TURNED
+                    heading = _heading(plan.direction, pos, orn, target.position)
+                    if heading is not None and self._start(slot, pos, heading):
+                        return
+                    continue
+                plan.stage = _DRIVING
+                keep = differential or not plan.final_align
+                if self._start(slot, target.position, orn if keep else target.orientation):
+                    return
+                continue
+            if plan.final_align and not plan.aligned:
+                plan.aligned = True
+                final = plan.final_orientation
+                if differential:  # a ground robot aligns its heading only
+                    final = quat_from_euler(0.0, 0.0, float(yaw_from_quats(final[None, :])[0]))
+                if self._start(slot, pos, final):
+                    return
+                continue
+            self._finish(slot, reached=True)
+            return
+
+    def _start(self, slot: int, target_pos: np.ndarray, target_orn: np.ndarray) -> bool:
+        """Begin a segment to (target_pos, target_orn); False if there is nothing to do."""
+        row = self.row[slot]
+        p0 = self._store.position[row].copy()
+        q0 = self._store.orientation[row].copy()
+        delta = np.asarray(target_pos, dtype=float) - p0
+        length = float(np.linalg.norm(delta))
+        q1 = np.asarray(target_orn, dtype=float).copy()
+        theta = quat_angle_between(q0, q1)
+        if length < _EPS_LEN and theta < _EPS_ANGLE:
+            return False
+        rate_v, rate_a = math.inf, math.inf
+        if length >= _EPS_LEN:
+            unit = delta / length
+            rate_v = _axis_cap(self.vmax[slot], bool(self.lin_scalar[slot]), unit) / length
+            rate_a = _axis_cap(self.amax[slot], bool(self.lin_scalar[slot]), unit) / length
+        axis = np.zeros(3)
+        if theta >= _EPS_ANGLE:
+            rel = quat_multiply(q1, q0 * np.array([-1.0, -1.0, -1.0, 1.0]))
+            sin_half = float(np.linalg.norm(rel[:3]))
+            axis = rel[:3] / sin_half if sin_half > 0 else np.array([0.0, 0.0, 1.0])
+            if rel[3] < 0:
+                axis = -axis
+            rate_v = min(
+                rate_v, _axis_cap(self.wmax[slot], bool(self.ang_scalar[slot]), axis) / theta
+            )
+            rate_a = min(
+                rate_a, _axis_cap(self.alpha[slot], bool(self.ang_scalar[slot]), axis) / theta
+            )
+        dot = float(q0 @ q1)
+        if dot < 0.0:
+            q1, dot = -q1, -dot
+        dot = min(dot, 1.0)
+        sl_theta = math.acos(dot)
+        self.p0[slot], self.p1[slot] = p0, target_pos
+        self.q0[slot], self.q1[slot] = q0, q1
+        self.sl_dot[slot], self.sl_theta[slot], self.sl_sin[slot] = (
+            dot,
+            sl_theta,
+            math.sin(sl_theta),
+        )
+        self.theta[slot], self.axis[slot] = theta, axis
+        self.u[slot], self.du[slot] = 0.0, 0.0
+        self.u_vmax[slot], self.u_amax[slot] = rate_v, rate_a
+        return True
+
+    def _finish(self, slot: int, reached: bool) -> None:
+        self._plans[slot] = None
+        self.mode[slot] = _IDLE
+        self.du[slot] = 0.0
+        row = self.row[slot]
+        self._store.velocity[row] = 0.0
+        self._store.angular_velocity[row] = 0.0
+        self._on_motion_end(slot, reached)
+
+    # ----- integration (numpy, every step) --------------------------------------------------
+
+    def advance(self, dt: float) -> None:
+        """Move every slot by one step of ``dt`` seconds."""
+        if self._high == 0:
+            return
+        mode = self.mode[: self._high]
+        pose_slots = np.flatnonzero(mode == _POSE)
+        if len(pose_slots):
+            self._advance_pose(pose_slots, dt)
+        vel_slots = np.flatnonzero(mode == _VELOCITY)
+        if len(vel_slots):
+            self._advance_velocity(vel_slots, dt)
+
+    def _advance_pose(self, s: np.ndarray, dt: float) -> None:
+        store = self._store
+        u, du = self.u[s], self.du[s]
+        vmax, amax = self.u_vmax[s], self.u_amax[s]
+        remaining = 1.0 - u
+        half = 0.5 * amax * dt
+        # Fastest rate from which the discrete braking sequence still stops within `remaining`.
+        rate_stop = -half + np.sqrt(half * half + 2.0 * amax * remaining)
+        rate = np.minimum(np.minimum(du + amax * dt, vmax), rate_stop)
+        rate = np.maximum(rate, np.maximum(du - amax * dt, 0.0))
+        step = rate * dt
+        arrived = step >= remaining - 1e-12
+        u_new = np.where(arrived, 1.0, u + step)
+        self.u[s] = u_new
+        self.du[s] = np.where(arrived, 0.0, rate)
+        rows = self.row[s]
+        old_pos = store.position[rows]
+        p0, p1 = self.p0[s], self.p1[s]
+        pos = p0 + (p1 - p0) * u_new[:, None]
+        pos[arrived] = p1[arrived]
+        quat = quat_slerp_batch(
+            self.q0[s], self.q1[s], u_new, self.sl_dot[s], self.sl_theta[s], self.sl_sin[s]
+        )
+        quat[arrived] = self.q1[s][arrived]
+        store.velocity[rows] = (pos - old_pos) / dt
+        store.angular_velocity[rows] = self.axis[s] * ((u_new - u) * self.theta[s] / dt)[:, None]
+        store.position[rows] = pos
+        store.orientation[rows] = quat
+        store.mark_moved(rows)
+        if arrived.any():
+            for slot in s[arrived].tolist():
+                if self.mode[slot] == _POSE and self._plans[slot] is not None:
+                    self._plan_next(slot)
+
+    def _advance_velocity(self, s: np.ndarray, dt: float) -> None:
+        store = self._store
+        rows = self.row[s]
+        acc = np.concatenate([self.amax[s], self.alpha[s][:, 2:3]], axis=1) * dt
+        cap = np.concatenate([self.vmax[s], self.wmax[s][:, 2:3]], axis=1)
+        vel = self.vel[s]
+        vel = vel + np.clip(self.cmd[s] - vel, -acc, acc)
+        vel = np.clip(vel, -cap, cap)
+        self.vel[s] = vel
+        yaw = yaw_from_quats(store.orientation[rows])
+        cos, sin = np.cos(yaw), np.sin(yaw)
+        world = np.stack(
+            [cos * vel[:, 0] - sin * vel[:, 1], sin * vel[:, 0] + cos * vel[:, 1], vel[:, 2]],
+            axis=1,
+        )
+        store.position[rows] += world * dt
+        new_yaw = yaw + vel[:, 3] * dt
+        half = 0.5 * new_yaw
+        store.orientation[rows] = np.stack(
+            [np.zeros_like(half), np.zeros_like(half), np.sin(half), np.cos(half)], axis=1
+        )
+        store.velocity[rows] = world
+        store.angular_velocity[rows] = np.stack(
+            [np.zeros_like(yaw), np.zeros_like(yaw), vel[:, 3]], axis=1
+        )
+        moving = np.any(vel != 0.0, axis=1)
+        if moving.any():
+            store.mark_moved(rows[moving])
