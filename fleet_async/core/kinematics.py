@@ -74,6 +74,24 @@ def _heading(
     return quat_from_euler(0.0, 0.0, yaw)
 
 
+def _braking_rate(remaining: np.ndarray, accel: np.ndarray, dt: float) -> np.ndarray:
+    """Fastest rate from which the discrete braking sequence still stops within ``remaining``.
+
+    Braking as hard as allowed from rate ``v = (j + f) * c`` (``c = accel * dt``, j integer,
+    f in (0, 1]) moves ``v, v - c, ..., f * c`` per step and covers
+    ``dt * c * (j + 1) * (f + j / 2)``. Inverting that for the largest ``v`` that fits gives a
+    profile that never brakes harder than ``accel``, ends with a last step of at most ``c``
+    (so the final stop is within the limit too), and lands exactly on the target.
+    """
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        c = accel * dt
+        scaled = remaining / (dt * c)
+        j = np.maximum(np.ceil((np.sqrt(1.0 + 8.0 * scaled) - 1.0) / 2.0) - 1.0, 0.0)
+        f = np.clip(scaled / (j + 1.0) - j / 2.0, 0.0, 1.0)
+        rate = (j + f) * c
+    return np.where(np.isfinite(c), rate, np.inf)
+
+
 def _axis_cap(limit: np.ndarray, scalar: bool, direction: np.ndarray) -> float:
     """Largest magnitude along unit ``direction`` allowed by a scalar or per-axis limit."""
     if scalar:
@@ -111,6 +129,7 @@ class KinematicEngine:
         self._on_motion_end = on_motion_end
         self._free: list[int] = []
         self._high = 0
+        self._stopped: list[int] = []  # slots that arrived last step: zero their velocity next
         self._plans: list[_Plan | None] = []
         self._alloc(16)
 
@@ -129,9 +148,9 @@ class KinematicEngine:
         grow("mode", (), np.int8, _IDLE)
         for name in ("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"):
             grow(name, (3,), np.float64, 0.0)
-        for name in ("q0", "q1"):
+        for name in ("q0", "q1", "q_goal"):
             grow(name, (4,), np.float64, 0.0)
-        for name in ("u", "du", "u_vmax", "u_amax", "theta", "sl_dot", "sl_theta", "sl_sin"):
+        for name in ("u", "du", "u_vmax", "u_amax", "theta", "sl_dot", "sl_theta", "sl_sin", "carry"):
             grow(name, (), np.float64, 0.0)
         grow("lin_scalar", (), np.bool_, True)
         grow("ang_scalar", (), np.bool_, True)
@@ -248,7 +267,12 @@ class KinematicEngine:
         if self.mode[slot] == _POSE:
             self._interrupt(slot)
         if self.mode[slot] != _VELOCITY:
-            self.vel[slot] = 0.0
+            # Start from the current motion so the command ramps within the accel limits.
+            row = self.row[slot]
+            yaw = float(yaw_from_quats(self._store.orientation[row][None, :])[0])
+            vx, vy, vz = self._store.velocity[row]
+            cos, sin = math.cos(yaw), math.sin(yaw)
+            self.vel[slot] = (cos * vx + sin * vy, -sin * vx + cos * vy, vz, self._store.angular_velocity[row][2])
         self.cmd[slot] = command
         self.mode[slot] = _VELOCITY
 
@@ -316,6 +340,7 @@ class KinematicEngine:
         delta = np.asarray(target_pos, dtype=float) - p0
         length = float(np.linalg.norm(delta))
         q1 = np.asarray(target_orn, dtype=float).copy()
+        self.q_goal[slot] = q1  # exactly as given: the pose on arrival (q1 may flip sign below)
         theta = quat_angle_between(q0, q1)
         if length < _EPS_LEN and theta < _EPS_ANGLE:
             return False
@@ -352,15 +377,16 @@ class KinematicEngine:
         self.theta[slot], self.axis[slot] = theta, axis
         self.u[slot], self.du[slot] = 0.0, 0.0
         self.u_vmax[slot], self.u_amax[slot] = rate_v, rate_a
+        self.mode[slot] = _POSE
         return True
 
     def _finish(self, slot: int, reached: bool) -> None:
+        # The velocity of the step that arrived stays visible for that step; it is zeroed at
+        # the start of the next advance unless a new segment is under way by then.
         self._plans[slot] = None
         self.mode[slot] = _IDLE
         self.du[slot] = 0.0
-        row = self.row[slot]
-        self._store.velocity[row] = 0.0
-        self._store.angular_velocity[row] = 0.0
+        self._stopped.append(slot)
         self._on_motion_end(slot, reached)
 
     # ----- integration (numpy, every step) --------------------------------------------------
@@ -369,6 +395,14 @@ class KinematicEngine:
         """Move every slot by one step of ``dt`` seconds."""
         if self._high == 0:
             return
+        if self._stopped:
+            idle = [s for s in self._stopped if self.mode[s] == _IDLE and self.row[s] >= 0]
+            self._stopped.clear()
+            if idle:
+                rows = self.row[idle]
+                self._store.velocity[rows] = 0.0
+                self._store.angular_velocity[rows] = 0.0
+                self.carry[idle] = 0.0
         mode = self.mode[: self._high]
         pose_slots = np.flatnonzero(mode == _POSE)
         if len(pose_slots):
@@ -382,16 +416,17 @@ class KinematicEngine:
         u, du = self.u[s], self.du[s]
         vmax, amax = self.u_vmax[s], self.u_amax[s]
         remaining = 1.0 - u
-        half = 0.5 * amax * dt
-        # Fastest rate from which the discrete braking sequence still stops within `remaining`.
-        rate_stop = -half + np.sqrt(half * half + 2.0 * amax * remaining)
-        rate = np.minimum(np.minimum(du + amax * dt, vmax), rate_stop)
-        rate = np.maximum(rate, np.maximum(du - amax * dt, 0.0))
+        # `carry`: share of this step's acceleration budget already spent by the previous
+        # segment's last step (its velocity must fall to zero and the new one rise from it).
+        budget = amax * dt * (1.0 - self.carry[s])
+        rate = np.minimum(np.minimum(du + budget, vmax), _braking_rate(remaining, amax, dt))
         step = rate * dt
         arrived = step >= remaining - 1e-12
         u_new = np.where(arrived, 1.0, u + step)
         self.u[s] = u_new
         self.du[s] = np.where(arrived, 0.0, rate)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.carry[s] = np.where(arrived, np.nan_to_num(rate / (amax * dt)), 0.0)
         rows = self.row[s]
         old_pos = store.position[rows]
         p0, p1 = self.p0[s], self.p1[s]
@@ -400,7 +435,7 @@ class KinematicEngine:
         quat = quat_slerp_batch(
             self.q0[s], self.q1[s], u_new, self.sl_dot[s], self.sl_theta[s], self.sl_sin[s]
         )
-        quat[arrived] = self.q1[s][arrived]
+        quat[arrived] = self.q_goal[s][arrived]
         store.velocity[rows] = (pos - old_pos) / dt
         store.angular_velocity[rows] = self.axis[s] * ((u_new - u) * self.theta[s] / dt)[:, None]
         store.position[rows] = pos

@@ -1,0 +1,232 @@
+"""Motion guarantees of the built-in controllers, checked step by step with numbers."""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import pytest
+
+from fleet_async import Agent, Path, Pose, ShapeParams
+
+DT = 0.1
+TOL = 1e-9
+BOX = ShapeParams("box", half_extents=[0.2, 0.2, 0.1])
+
+
+def spawn(sim, controller="omni", xyz=(0.0, 0.0, 0.1), yaw=0.0, **kw):
+    return Agent.from_mesh(BOX, BOX, Pose.from_euler(*xyz, yaw=yaw), sim_core=sim, controller=controller, **kw)
+
+
+def run(sim, agent, max_steps=2000):
+    """Step until the agent stops; return per-step (position, yaw, velocity, yaw rate)."""
+    trace = []
+    for _ in range(max_steps):
+        sim.step_once()
+        pose = agent.get_pose()
+        trace.append((pose.position.copy(), pose.yaw, agent.velocity, agent.angular_velocity))
+        if not agent.is_moving:
+            return trace
+    raise AssertionError("agent did not stop")
+
+
+def accelerations(values):
+    v = np.vstack([np.zeros_like(values[0]), *values, np.zeros_like(values[0])])
+    return np.diff(v, axis=0) / DT
+
+
+def test_omni_trapezoid_reaches_goal_exactly_within_limits(sim):
+    agent = spawn(sim, {"type": "omni", "max_linear_vel": 2.0, "max_linear_accel": 5.0})
+    agent.set_goal_pose(Pose.from_xyz(10.0, 0.0, 0.1))
+    trace = run(sim, agent)
+    assert agent.get_pose().position.tolist() == [10.0, 0.0, 0.1]
+    speeds = np.array([np.linalg.norm(v) for _, _, v, _ in trace])
+    assert speeds.max() <= 2.0 + TOL
+    assert np.abs(accelerations(list(speeds[:, None]))).max() <= 5.0 + 1e-6
+    # Per-step speeds ramp by a*dt = 0.5 m/s: 0.5, 1.0, 1.5 (0.3 m), cruise at 2.0 m/s for
+    # 9.4 m (47 steps), then 1.5, 1.0, 0.5 (0.3 m): 53 steps, ending exactly on the goal.
+    assert speeds[:4] == pytest.approx([0.5, 1.0, 1.5, 2.0])
+    assert speeds[-4:] == pytest.approx([2.0, 1.5, 1.0, 0.5])
+    assert len(trace) == 53 and np.isclose(speeds, 2.0).sum() == 47
+    assert agent.motion_result is True
+    assert agent.velocity[0] == pytest.approx(0.5)  # the arrival step's own velocity
+    sim.step_once()
+    assert agent.velocity.tolist() == [0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_limits_hold_every_step_on_random_paths(sim, seed):
+    rng = np.random.default_rng(seed)
+    limits = {"max_linear_vel": [1.0, 0.5, 0.3], "max_linear_accel": [2.0, 1.0, 1.5],
+              "max_angular_vel": 1.5, "max_angular_accel": 4.0}
+    agent = spawn(sim, {"type": "omni", **limits})
+    waypoints = [Pose.from_euler(*rng.uniform(-3, 3, 3), yaw=rng.uniform(-3, 3)) for _ in range(4)]
+    agent.set_path(waypoints)
+    trace = run(sim, agent)
+    vel = np.array([v for _, _, v, _ in trace])
+    assert (np.abs(vel) <= np.array(limits["max_linear_vel"]) + TOL).all()
+    assert (np.abs(accelerations(list(vel))) <= np.array(limits["max_linear_accel"]) + 1e-6).all()
+    yaw_rate = np.array([w for _, _, _, w in trace])
+    assert np.abs(yaw_rate).max() <= 1.5 + TOL
+    assert np.allclose(agent.get_pose().position, waypoints[-1].position, atol=1e-12)
+    assert agent.get_pose().orientation == pytest.approx(waypoints[-1].orientation, abs=1e-12)
+
+
+def test_differential_rotates_in_place_then_drives_straight(sim):
+    agent = spawn(sim, {"type": "differential", "max_angular_vel": 1.0, "max_angular_accel": 2.0})
+    agent.set_path([Pose.from_xyz(0.0, 4.0, 0.1)], final_orientation_align=False)
+    trace = run(sim, agent)
+    turning = [t for t in trace if abs(t[3]) > 0]
+    driving = [t for t in trace if np.linalg.norm(t[2]) > 0]
+    assert turning and driving
+    last_turn = max(i for i, t in enumerate(trace) if abs(t[3]) > 0)
+    first_drive = min(i for i, t in enumerate(trace) if np.linalg.norm(t[2]) > 0)
+    assert last_turn < first_drive  # rotate, then drive: never both
+    for pos, _, _, _ in trace[: last_turn + 1]:
+        assert pos.tolist() == [0.0, 0.0, 0.1]
+    for _, yaw, vel, _ in driving:
+        assert yaw == pytest.approx(math.pi / 2, abs=1e-12)
+        assert vel[0] == pytest.approx(0.0, abs=1e-12) and vel[1] > 0
+    rates = np.array([w for _, _, _, w in trace])
+    assert np.abs(rates).max() <= 1.0 + TOL
+    assert np.abs(accelerations(list(rates[:, None]))).max() <= 2.0 + 1e-6
+    assert agent.get_pose().position.tolist() == [0.0, 4.0, 0.1]
+
+
+def test_differential_final_orientation_align(sim):
+    agent = spawn(sim, "differential")
+    agent.set_path([Pose.from_euler(2.0, 2.0, 0.1, yaw=-1.0)])
+    run(sim, agent)
+    assert agent.get_pose().yaw == pytest.approx(-1.0, abs=1e-12)
+    assert agent.get_pose().position.tolist() == [2.0, 2.0, 0.1]
+
+
+def test_backward_keeps_its_heading(sim):
+    agent = spawn(sim, "differential")
+    agent.set_path([Pose.from_xyz(-3.0, 0.0, 0.1)], final_orientation_align=False, direction="backward")
+    trace = run(sim, agent)
+    assert all(abs(t[3]) == 0 for t in trace)  # already facing away from the goal: no turn
+    assert all(yaw == pytest.approx(0.0, abs=1e-12) for _, yaw, _, _ in trace)
+    assert agent.get_pose().position.tolist() == [-3.0, 0.0, 0.1]
+
+
+def test_auto_direction_drives_backward_to_a_goal_behind(sim):
+    agent = spawn(sim, "differential", yaw=0.2)
+    agent.set_path([Pose.from_xyz(-3.0, 0.0, 0.1)], final_orientation_align=False, direction="auto")
+    run(sim, agent)
+    assert agent.get_pose().yaw == pytest.approx(0.0, abs=1e-12)  # turned by 0.2 rad, not pi
+    forward = spawn(sim, "differential", xyz=(0.0, 5.0, 0.1))
+    forward.set_path([Pose.from_xyz(3.0, 5.0, 0.1)], final_orientation_align=False, direction="auto")
+    run(sim, forward)
+    assert forward.get_pose().yaw == pytest.approx(0.0, abs=1e-12)
+
+
+def test_path_progress_queries(sim):
+    agent = spawn(sim, "omni")
+    path = Path.from_positions([[1, 0, 0.1], [1, 1, 0.1], [0, 1, 0.1]])
+    agent.set_path(path, final_orientation_align=False)
+    assert agent.goal_pose.position.tolist() == [0, 1, 0.1]
+    assert agent.current_waypoint_index == 0 and len(agent.path) == 3
+    seen = {agent.current_waypoint_index}
+    arrivals = []
+    while agent.is_moving:
+        before = agent.current_waypoint_index
+        sim.step_once()
+        seen.add(agent.current_waypoint_index)
+        if agent.current_waypoint_index != before or not agent.is_moving:
+            arrivals.append(agent.get_pose().position.tolist())
+    assert seen == {0, 1, 2}
+    assert arrivals == [[1, 0, 0.1], [1, 1, 0.1], [0, 1, 0.1]]
+    assert agent.goal_pose is None and agent.path == []
+
+
+def test_auto_approach_false_starts_from_the_first_waypoint(sim):
+    agent = spawn(sim, "omni")
+    agent.set_path(Path.from_positions([[5, 5, 0.1], [0, 2, 0.1]]), auto_approach=False)
+    positions = [p for p, _, _, _ in run(sim, agent)]
+    assert all(p[0] == pytest.approx(0.0, abs=1e-12) for p in positions)  # never went to (5, 5)
+    assert positions[-1].tolist() == [0, 2, 0.1]
+
+
+def test_stop_halts_in_the_same_step(sim):
+    agent = spawn(sim, "omni")
+    agent.set_goal_pose(Pose.from_xyz(10, 0, 0.1))
+    for _ in range(10):
+        sim.step_once()
+    agent.stop()
+    where = agent.get_pose().position.copy()
+    assert not agent.is_moving and agent.motion_result is False
+    assert agent.velocity.tolist() == [0, 0, 0] and agent.goal_pose is None
+    sim.step_once()
+    assert agent.get_pose().position.tolist() == where.tolist()
+
+
+def test_new_goal_replaces_the_old_one(sim):
+    agent = spawn(sim, "omni")
+    agent.set_goal_pose(Pose.from_xyz(10, 0, 0.1))
+    sim.step_once()
+    agent.set_goal_pose(Pose.from_xyz(0, -2, 0.1))
+    run(sim, agent)
+    assert agent.get_pose().position.tolist() == [0, -2, 0.1]
+
+
+def test_cmd_vel_accelerates_to_the_command_within_limits(sim):
+    agent = spawn(sim, {"type": "differential", "max_linear_vel": 1.0, "max_linear_accel": 2.0})
+    agent.set_cmd_vel(vx=0.8, wz=0.5)
+    speeds = []
+    for _ in range(20):
+        sim.step_once()
+        speeds.append(float(np.linalg.norm(agent.velocity)))
+    assert speeds[0] == pytest.approx(0.2) and speeds[3] == pytest.approx(0.8)
+    assert speeds[-1] == pytest.approx(0.8) and agent.angular_velocity == pytest.approx(0.5)
+    assert agent.is_moving
+    with pytest.raises(ValueError, match="sideways"):
+        agent.set_cmd_vel(vy=0.1)
+    agent.set_cmd_vel(vx=5.0)  # clipped to the limit
+    for _ in range(10):
+        sim.step_once()
+    assert float(np.linalg.norm(agent.velocity)) == pytest.approx(1.0)
+    agent.stop()
+    assert not agent.is_moving
+
+
+def test_omni_moves_in_3d_and_sideways(sim):
+    agent = spawn(sim, "omni")
+    agent.set_cmd_vel(vy=0.5)
+    for _ in range(30):
+        sim.step_once()
+    assert agent.get_pose().x == pytest.approx(0.0) and agent.get_pose().y > 0
+    agent.set_goal_pose(Pose.from_xyz(1, 1, 2.0))
+    run(sim, agent)
+    assert agent.get_pose().position.tolist() == [1, 1, 2.0]
+
+
+def test_fixed_base_ignores_motion_with_a_warning(sim, caplog):
+    agent = spawn(sim, "omni", use_fixed_base=True)
+    with caplog.at_level(logging.WARNING):
+        agent.set_goal_pose(Pose.from_xyz(3, 0, 0.1))
+    assert "fixed base" in caplog.text and not agent.is_moving
+    sim.step_once()
+    assert agent.get_pose().x == 0.0
+
+
+def test_bad_paths_are_rejected(sim):
+    agent = spawn(sim, "omni")
+    with pytest.raises(ValueError, match="waypoint 1"):
+        agent.set_path([Pose.from_xyz(1, 0, 0), [2, 0, 0]])
+    with pytest.raises(ValueError, match="Pose"):
+        agent.set_goal_pose([1, 2, 3])
+    with pytest.raises(ValueError, match="direction"):
+        agent.set_path([Pose.from_xyz(1, 0, 0)], direction="sideways")
+
+
+def test_many_agents_move_independently_in_one_pass(sim):
+    agents = [spawn(sim, "omni" if i % 2 else "differential", xyz=(i, 0, 0.1)) for i in range(20)]
+    for i, agent in enumerate(agents):
+        agent.set_goal_pose(Pose.from_xyz(i, 3 + i % 4, 0.1))
+    for _ in range(200):
+        sim.step_once()
+    for i, agent in enumerate(agents):
+        assert agent.get_pose().position.tolist() == [i, 3 + i % 4, 0.1]
+        assert not agent.is_moving
