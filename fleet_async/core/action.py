@@ -94,7 +94,7 @@ class Action(ABC):
         if hook is not None:
             hook(self)
 
-    def on_cancel(self, agent: Agent) -> None:
+    def on_cancel(self, agent: Agent) -> None:  # noqa: B027  # optional hook, empty by default
         """Clean up after being cancelled while running (the queue has already stopped motion)."""
 
     def bind_cancel_hook(self, hook: Callable[[Action], None] | None) -> None:

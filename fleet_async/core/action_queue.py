@@ -9,6 +9,7 @@ the order never depends on dict or set iteration.
 
 from __future__ import annotations
 
+import functools
 import heapq
 from collections import deque
 from typing import TYPE_CHECKING
@@ -66,7 +67,8 @@ class ActionQueue:
             raise TypeError(f"add_action: expected an Action, got {action!r}")
         if action.status is not ActionStatus.NOT_STARTED:
             raise ValueError(
-                f"add_action: {type(action).__name__} is {action.status.value}; reset() it to reuse it"
+                f"add_action: {type(action).__name__} is {action.status.value}; "
+                "reset() it to reuse it"
             )
         if (
             any(action is a for q in self._queued.values() for a in q)
@@ -76,7 +78,7 @@ class ActionQueue:
         key = agent.object_id
         self._agents[key] = agent
         self._queued.setdefault(key, deque()).append(action)
-        action.bind_cancel_hook(lambda a, ag=agent: self._cancelled(ag, a))
+        action.bind_cancel_hook(functools.partial(self._cancelled, agent))
         self._due.add(key)
 
     def clear(self, agent: Agent) -> None:

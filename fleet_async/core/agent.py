@@ -76,7 +76,7 @@ class Agent(SimObject):
         notify_spawn: Emit the spawn events once the agent is built.
     """
 
-    _spawn_params_cls: ClassVar[type[AgentSpawnParams]] = AgentSpawnParams  # type: ignore[assignment]
+    _spawn_params_cls: ClassVar[type[AgentSpawnParams]] = AgentSpawnParams
     is_agent: ClassVar[bool] = True
     spawned_event: ClassVar[str | None] = SimEvents.AGENT_SPAWNED
     removed_event: ClassVar[str | None] = SimEvents.AGENT_REMOVED
@@ -312,7 +312,8 @@ class Agent(SimObject):
         ctrl = controller if isinstance(controller, Controller) else create_controller(controller)
         if not ctrl.is_base:
             raise ValueError(
-                f"set_controller: {type(ctrl).__name__} is not a base controller; use add_controller"
+                f"set_controller: {type(ctrl).__name__} is not a base controller; "
+                "use add_controller"
             )
         self._install_chain([ctrl, *rest])
 
@@ -322,7 +323,8 @@ class Agent(SimObject):
             raise TypeError(f"add_controller: expected a Controller, got {controller!r}")
         if controller.is_base:
             raise ValueError(
-                f"add_controller: {type(controller).__name__} is a base controller; use set_controller"
+                f"add_controller: {type(controller).__name__} is a base controller; "
+                "use set_controller"
             )
         if not self._controllers:
             raise ValueError(

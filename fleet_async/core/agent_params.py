@@ -46,7 +46,8 @@ class IKParams:
         quartiles = tuple(float(q) for q in self.seed_quartiles)
         if not quartiles or not all(0.0 <= q <= 1.0 for q in quartiles):
             raise ValueError(
-                f"IKParams.seed_quartiles: expected fractions in [0, 1], got {self.seed_quartiles!r}"
+                "IKParams.seed_quartiles: expected fractions in [0, 1], "
+                f"got {self.seed_quartiles!r}"
             )
         self.seed_quartiles = quartiles
         if self.ik_joint_names is not None:

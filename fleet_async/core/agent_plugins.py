@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -47,7 +47,7 @@ class BatteryPlugin(AgentPlugin):
         ValueError: for an unknown key or a value out of range, naming it.
     """
 
-    DEFAULTS: dict[str, float] = {
+    DEFAULTS: ClassVar[dict[str, float]] = {
         "initial_soc": 1.0,
         "drain_per_meter": 0.001,
         "drain_per_second": 0.0001,
@@ -74,7 +74,8 @@ class BatteryPlugin(AgentPlugin):
                 )
         if values["initial_soc"] > 1.0:
             raise ValueError(
-                f"BatteryPlugin.initial_soc: expected a value in [0, 1], got {values['initial_soc']!r}"
+                "BatteryPlugin.initial_soc: expected a value in [0, 1], "
+                f"got {values['initial_soc']!r}"
             )
         self.soc = float(values["initial_soc"])
         self.drain_per_meter = float(values["drain_per_meter"])

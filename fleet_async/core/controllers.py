@@ -199,7 +199,8 @@ class KinematicController(Controller):
 
 
 def _engine(agent: Agent) -> KinematicEngine:
-    assert agent.sim_core is not None and agent.motion_slot >= 0
+    assert agent.sim_core is not None
+    assert agent.motion_slot >= 0
     return agent.sim_core.fleet.engine
 
 

@@ -124,6 +124,34 @@ class KinematicEngine:
             finished its path, False when stopped or replaced.
     """
 
+    # Per-slot columns, grown together by _alloc (see there for shapes).
+    row: np.ndarray
+    kind: np.ndarray
+    mode: np.ndarray
+    vmax: np.ndarray
+    amax: np.ndarray
+    wmax: np.ndarray
+    alpha: np.ndarray
+    p0: np.ndarray
+    p1: np.ndarray
+    axis: np.ndarray
+    q0: np.ndarray
+    q1: np.ndarray
+    q_goal: np.ndarray
+    u: np.ndarray
+    du: np.ndarray
+    u_vmax: np.ndarray
+    u_amax: np.ndarray
+    theta: np.ndarray
+    sl_dot: np.ndarray
+    sl_theta: np.ndarray
+    sl_sin: np.ndarray
+    carry: np.ndarray
+    lin_scalar: np.ndarray
+    ang_scalar: np.ndarray
+    cmd: np.ndarray
+    vel: np.ndarray
+
     def __init__(self, store: KinematicState, on_motion_end: Callable[[int, bool], None]) -> None:
         self._store = store
         self._on_motion_end = on_motion_end
@@ -137,7 +165,7 @@ class KinematicEngine:
 
     def _alloc(self, cap: int) -> None:
         def grow(name: str, shape: tuple[int, ...], dtype: type, fill: float) -> None:
-            new = np.full((cap, *shape), fill, dtype=dtype)
+            new: np.ndarray = np.full((cap, *shape), fill, dtype=dtype)
             old = getattr(self, name, None)
             if old is not None:
                 new[: len(old)] = old
@@ -150,7 +178,17 @@ class KinematicEngine:
             grow(name, (3,), np.float64, 0.0)
         for name in ("q0", "q1", "q_goal"):
             grow(name, (4,), np.float64, 0.0)
-        for name in ("u", "du", "u_vmax", "u_amax", "theta", "sl_dot", "sl_theta", "sl_sin", "carry"):
+        for name in (
+            "u",
+            "du",
+            "u_vmax",
+            "u_amax",
+            "theta",
+            "sl_dot",
+            "sl_theta",
+            "sl_sin",
+            "carry",
+        ):
             grow(name, (), np.float64, 0.0)
         grow("lin_scalar", (), np.bool_, True)
         grow("ang_scalar", (), np.bool_, True)
@@ -272,7 +310,12 @@ class KinematicEngine:
             yaw = float(yaw_from_quats(self._store.orientation[row][None, :])[0])
             vx, vy, vz = self._store.velocity[row]
             cos, sin = math.cos(yaw), math.sin(yaw)
-            self.vel[slot] = (cos * vx + sin * vy, -sin * vx + cos * vy, vz, self._store.angular_velocity[row][2])
+            self.vel[slot] = (
+                cos * vx + sin * vy,
+                -sin * vx + cos * vy,
+                vz,
+                self._store.angular_velocity[row][2],
+            )
         self.cmd[slot] = command
         self.mode[slot] = _VELOCITY
 

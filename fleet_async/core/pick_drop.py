@@ -207,7 +207,8 @@ class PickAction(_ApproachAction):
             )
         if not isinstance(self.attach_relative_pose, Pose):
             raise ValueError(
-                f"PickAction.attach_relative_pose: expected a Pose, got {self.attach_relative_pose!r}"
+                "PickAction.attach_relative_pose: expected a Pose, "
+                f"got {self.attach_relative_pose!r}"
             )
 
     def _target_position(self, agent: Agent) -> np.ndarray | str:
@@ -233,7 +234,8 @@ class PickAction(_ApproachAction):
             sim.sim_objects,
             list(self.target_position),
             self.search_radius,
-            predicate=lambda o: o.pickable and not o.is_attached(),
+            # Robots are never picked by a search; name one by id to pick it on purpose.
+            predicate=lambda o: o.pickable and not o.is_agent and not o.is_attached(),
             exclude=agent,
             use_2d=self.use_2d_search,
         )
@@ -331,7 +333,8 @@ class DropAction(_ApproachAction):
 
     def _act(self, agent: Agent) -> str | None:
         obj = self.dropped_object
-        assert obj is not None and self.drop_pose is not None
+        assert obj is not None
+        assert self.drop_pose is not None
         if obj.get_attached_parent() is not agent:
             return f"{obj!r} is no longer attached to {agent!r}"
         if self.drop_relative_pose is not None:

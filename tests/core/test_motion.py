@@ -16,7 +16,9 @@ BOX = ShapeParams("box", half_extents=[0.2, 0.2, 0.1])
 
 
 def spawn(sim, controller="omni", xyz=(0.0, 0.0, 0.1), yaw=0.0, **kw):
-    return Agent.from_mesh(BOX, BOX, Pose.from_euler(*xyz, yaw=yaw), sim_core=sim, controller=controller, **kw)
+    return Agent.from_mesh(
+        BOX, BOX, Pose.from_euler(*xyz, yaw=yaw), sim_core=sim, controller=controller, **kw
+    )
 
 
 def run(sim, agent, max_steps=2000):
@@ -58,8 +60,12 @@ def test_omni_trapezoid_reaches_goal_exactly_within_limits(sim):
 @pytest.mark.parametrize("seed", range(5))
 def test_limits_hold_every_step_on_random_paths(sim, seed):
     rng = np.random.default_rng(seed)
-    limits = {"max_linear_vel": [1.0, 0.5, 0.3], "max_linear_accel": [2.0, 1.0, 1.5],
-              "max_angular_vel": 1.5, "max_angular_accel": 4.0}
+    limits = {
+        "max_linear_vel": [1.0, 0.5, 0.3],
+        "max_linear_accel": [2.0, 1.0, 1.5],
+        "max_angular_vel": 1.5,
+        "max_angular_accel": 4.0,
+    }
     agent = spawn(sim, {"type": "omni", **limits})
     waypoints = [Pose.from_euler(*rng.uniform(-3, 3, 3), yaw=rng.uniform(-3, 3)) for _ in range(4)]
     agent.set_path(waypoints)
@@ -104,7 +110,9 @@ def test_differential_final_orientation_align(sim):
 
 def test_backward_keeps_its_heading(sim):
     agent = spawn(sim, "differential")
-    agent.set_path([Pose.from_xyz(-3.0, 0.0, 0.1)], final_orientation_align=False, direction="backward")
+    agent.set_path(
+        [Pose.from_xyz(-3.0, 0.0, 0.1)], final_orientation_align=False, direction="backward"
+    )
     trace = run(sim, agent)
     assert all(abs(t[3]) == 0 for t in trace)  # already facing away from the goal: no turn
     assert all(yaw == pytest.approx(0.0, abs=1e-12) for _, yaw, _, _ in trace)
@@ -117,7 +125,9 @@ def test_auto_direction_drives_backward_to_a_goal_behind(sim):
     run(sim, agent)
     assert agent.get_pose().yaw == pytest.approx(0.0, abs=1e-12)  # turned by 0.2 rad, not pi
     forward = spawn(sim, "differential", xyz=(0.0, 5.0, 0.1))
-    forward.set_path([Pose.from_xyz(3.0, 5.0, 0.1)], final_orientation_align=False, direction="auto")
+    forward.set_path(
+        [Pose.from_xyz(3.0, 5.0, 0.1)], final_orientation_align=False, direction="auto"
+    )
     run(sim, forward)
     assert forward.get_pose().yaw == pytest.approx(0.0, abs=1e-12)
 
