@@ -17,6 +17,7 @@ Profiling (``return_profiling``), real-time pacing and the monitor wrap this loo
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, Protocol
@@ -27,6 +28,7 @@ import pybullet as p
 from fleet_async.core import gui
 from fleet_async.core.attachments import AttachmentSet
 from fleet_async.core.backend import PyBulletBackend
+from fleet_async.core.collision import CollisionSystem
 from fleet_async.core.config_utils import load_yaml_config
 from fleet_async.core.events import EventBus, SimEvents
 from fleet_async.core.fleet import FleetMotion
@@ -38,6 +40,7 @@ from fleet_async.core.runner import run_loop
 from fleet_async.core.scheduling import PeriodicSchedule
 from fleet_async.core.sim_object import SimObject
 from fleet_async.core.state import KinematicState
+from fleet_async.core.types import SpatialHashCellSizeMode, coerce_enum
 from fleet_async.core.world import World
 
 __all__ = ["MotionSystem", "MultiRobotSimulationCore"]
@@ -81,6 +84,7 @@ class MultiRobotSimulationCore:
         self._backend.connect()
         self._world = World(self, self._backend, self.events, self._params.physics)
         self._fleet = FleetMotion(self)
+        self._collision = CollisionSystem(self, self._push_dirty)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
@@ -101,6 +105,7 @@ class MultiRobotSimulationCore:
             ("agent_update", self._phase_motion),
             ("attachments", self._world.attachments.follow_all),
             *((("step_simulation", self._phase_physics),) if self._params.physics else ()),
+            ("collision_check", self._phase_collision),
             ("events_post_step", self._phase_post_step),
         )
 
@@ -413,6 +418,10 @@ class MultiRobotSimulationCore:
         self._backend.step_physics()
         self._world.read_back_dynamic()
 
+    def _phase_collision(self) -> None:
+        if self._collision.is_due(self._step_count, self._params.timestep):
+            self._collision.check()
+
     def _phase_post_step(self) -> None:
         self._step_count += 1
         if self._backend.is_gui:
@@ -421,6 +430,87 @@ class MultiRobotSimulationCore:
             self.events.emit(
                 SimEvents.POST_STEP, sim=self, step=self._step_count, sim_time=self.sim_time
             )
+
+    # ----- collisions -----------------------------------------------------------------------
+
+    def _push_dirty(self, rows: np.ndarray) -> None:
+        store = self._world.store
+        dirty = rows[store.dirty[rows]]
+        if len(dirty):
+            self._backend.push_rows(store, dirty)
+
+    def note_collisions(self, started: int) -> None:
+        """Count collisions that started (called by the collision system)."""
+        self._collision_count += started
+
+    def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
+        """``{object_id: (aabb_min, aabb_max)}`` of every object taking part in collisions."""
+        return self._collision.get_aabbs()
+
+    def filter_aabb_pairs(
+        self,
+        ignore_static: bool | None = None,
+        moved_objects: set[int] | None = None,
+        return_profiling: bool = False,
+    ) -> tuple[list[tuple[int, int]], dict[str, float] | None]:
+        """Broad phase only: object-id pairs whose AABBs overlap and involve a moved object.
+
+        Args:
+            ignore_static: Skip pairs with a STATIC object (default: params).
+            moved_objects: Object ids to treat as moved (default: those that moved).
+            return_profiling: Also return ``{get_aabbs, spatial_hashing, aabb_filtering,
+                total}`` in ms.
+        """
+        t0 = time.perf_counter()
+        rows, timings = self._collision.filter_pairs(ignore_static, moved_objects)
+        ids = self._world.store.object_id[rows].tolist() if len(rows) else []
+        pairs = sorted(tuple(sorted(pair)) for pair in ids)
+        timings["total"] = (time.perf_counter() - t0) * 1e3
+        return pairs, timings if return_profiling else None  # type: ignore[return-value]
+
+    def check_collisions(
+        self,
+        collision_color: list[float] | None = None,
+        ignore_static: bool | None = None,
+        return_profiling: bool = False,
+    ) -> tuple[list[tuple[int, int]], dict[str, float] | None]:
+        """Run a collision check now; return the active pairs (object ids, i < j)."""
+        pairs, timings = self._collision.check(ignore_static, collision_color)
+        return pairs, timings if return_profiling else None
+
+    def get_active_collision_pairs(self) -> list[tuple[int, int]]:
+        """Pairs (object_id_i < object_id_j) in contact as of the last check."""
+        return self._collision.active_pairs()
+
+    def set_collision_check_frequency(self, frequency: float | None = None) -> None:
+        """Check every step (None), never (0), or at ``frequency`` Hz of sim time."""
+        self._collision.set_frequency(frequency)
+
+    def set_collision_spatial_hash_cell_size_mode(
+        self, mode: SpatialHashCellSizeMode | str | None = None, cell_size: float | None = None
+    ) -> float:
+        """Switch the hash cell size mode (CONSTANT needs ``cell_size``) and recompute it.
+
+        Returns:
+            The cell size now in force (m, > 0).
+        """
+        if mode is not None:
+            self._collision.cell_mode = coerce_enum(SpatialHashCellSizeMode, mode, "mode")
+        if cell_size is not None:
+            if not (isinstance(cell_size, (int, float)) and cell_size > 0):
+                raise ValueError(f"cell_size: expected a number > 0 (m), got {cell_size!r}")
+            self._collision.cell_size = float(cell_size)
+        elif (
+            self._collision.cell_mode is SpatialHashCellSizeMode.CONSTANT
+            and not self._collision.cell_size
+        ):
+            raise ValueError(
+                "set_collision_spatial_hash_cell_size_mode: CONSTANT mode needs a cell_size"
+            )
+        rows = self._collision.prepare_rows()
+        if self._collision.cell_mode is SpatialHashCellSizeMode.CONSTANT:
+            return float(self._collision.cell_size or 1.0)
+        return self._collision.resolve_cell_size(rows, recompute=True)
 
     def record_profiling(self, name: str, value_ms: float) -> None:
         """Add ``value_ms`` to custom profiling field ``name`` for the current step."""
@@ -486,6 +576,7 @@ class MultiRobotSimulationCore:
         """
         removed = self._world.clear()
         self._fleet.reset()
+        self._collision.reset()
         for manager in self._managers:
             manager.clear()
         self._backend.reset_world()

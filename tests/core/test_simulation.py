@@ -64,6 +64,7 @@ def test_return_profiling_has_every_phase_and_custom_fields(sim):
         "callbacks",
         "agent_update",
         "attachments",
+        "collision_check",
         "events_post_step",
         "total",
         "custom_logic",
@@ -228,6 +229,7 @@ def test_set_poses_rejects_bad_input_without_writing(sim):
 
 def test_pybullet_sync_is_lazy_inside_steps(sim):
     obj = box(sim)
+    sim.step_once()  # the collision system registers the new body (and syncs it) once
     sim.register_callback(lambda s, dt: obj.set_pose(Pose.from_xyz(3, 0, 0.5)))
     sim.step_once()
     assert obj.get_pose().x == 3

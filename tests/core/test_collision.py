@@ -1,0 +1,276 @@
+"""Collision detection: modes, methods, events, frequency, and the broad phase vs brute force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pybullet as p
+import pytest
+
+from fleet_async import (
+    CollisionMode,
+    MultiRobotSimulationCore,
+    Pose,
+    ShapeParams,
+    SimEvents,
+    SimObject,
+    SpatialHashCellSizeMode,
+)
+from fleet_async.core.broadphase import aabb_overlap, candidate_pairs
+from tests.conftest import headless_params
+
+HALF = 0.1
+CUBE = ShapeParams("box", half_extents=[HALF, HALF, HALF])
+
+
+def cube(sim, x, y=0.0, z=0.5, mode=CollisionMode.NORMAL_3D, **kw):
+    return SimObject.from_mesh(
+        CUBE, CUBE, Pose.from_xyz(x, y, z), sim_core=sim, collision_mode=mode, **kw
+    )
+
+
+def make_sim(**overrides):
+    return MultiRobotSimulationCore(headless_params(enable_floor=False, **overrides))
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.015, 0.025, 0.5])
+@pytest.mark.parametrize("mode", [CollisionMode.NORMAL_3D, CollisionMode.NORMAL_2D])
+def test_closest_points_uses_the_margin(gap, mode):
+    with make_sim(collision_margin=0.02) as sim:
+        a, b = cube(sim, 0.0, mode=mode), cube(sim, 2 * HALF + gap, mode=mode)
+        pairs, _ = sim.check_collisions()
+        expected = [(a.object_id, b.object_id)] if gap <= 0.02 else []
+        assert pairs == expected
+
+
+@pytest.mark.parametrize("method", ["closest_points", "hybrid"])
+def test_static_and_disabled_modes(method):
+    with make_sim(collision_detection_method=method, ignore_static_collision=False) as sim:
+        wall = cube(sim, 0.0, mode=CollisionMode.STATIC)
+        other_wall = cube(sim, 0.2, mode=CollisionMode.STATIC)
+        ghost = cube(sim, 0.0, y=0.2, mode=CollisionMode.DISABLED)
+        robot = cube(sim, 0.1, y=0.2)
+        pairs, _ = sim.check_collisions()
+        # the robot touches both walls; walls never pair with each other; the ghost with nobody
+        assert pairs == sorted(
+            [(wall.object_id, robot.object_id), (other_wall.object_id, robot.object_id)]
+        )
+        assert all(ghost.object_id not in pair for pair in pairs)
+
+
+def test_ignore_static_collision_hides_static_pairs():
+    with make_sim() as sim:  # ignore_static_collision defaults to True
+        cube(sim, 0.0, mode=CollisionMode.STATIC)
+        robot = cube(sim, 0.15)
+        buddy = cube(sim, 0.3)
+        pairs, _ = sim.check_collisions()
+        assert pairs == [(robot.object_id, buddy.object_id)]
+
+
+def test_normal_2d_ignores_height():
+    with make_sim() as sim:
+        low, high = (
+            cube(sim, 0.0, z=0.1, mode="normal_2d"),
+            cube(sim, 0.05, z=3.0, mode="normal_2d"),
+        )
+        flat_vs_3d = cube(sim, 5.0, z=0.1, mode="normal_2d"), cube(sim, 5.05, z=3.0)
+        pairs, _ = sim.filter_aabb_pairs()
+        assert (low.object_id, high.object_id) in pairs
+        assert (flat_vs_3d[0].object_id, flat_vs_3d[1].object_id) in pairs  # one 2D side is enough
+        three_d = cube(sim, 9.0, z=0.1), cube(sim, 9.05, z=3.0)
+        pairs, _ = sim.filter_aabb_pairs()
+        assert (three_d[0].object_id, three_d[1].object_id) not in pairs
+
+
+def test_contact_points_with_physics():
+    with make_sim(physics=True) as sim:
+        assert sim.params.resolved_collision_detection_method.value == "contact_points"
+        resting = cube(sim, 0.0, z=0.0)
+        falling = cube(sim, 0.0, z=0.25, mass=1.0)
+        apart = cube(sim, 3.0, z=0.0)
+        started = []
+        sim.events.on(
+            SimEvents.COLLISION_STARTED, lambda **kw: started.append((kw["obj_a"], kw["obj_b"]))
+        )
+        for _ in range(10):
+            sim.step_once()
+        assert (resting, falling) in started
+        assert all(apart not in pair for pair in started)
+
+
+def test_events_fire_once_per_contact_and_count():
+    with make_sim() as sim:
+        a, b = cube(sim, 0.0), cube(sim, 1.0)
+        log = []
+        sim.events.on(
+            SimEvents.COLLISION_STARTED, lambda **kw: log.append(("start", sim.step_count))
+        )
+        sim.events.on(SimEvents.COLLISION_ENDED, lambda **kw: log.append(("end", sim.step_count)))
+        mine = []
+        a.events.on(SimEvents.COLLISION_STARTED, lambda **kw: mine.append(kw["other"]))
+        xs = [1.0, 0.6, 0.3, 0.19, 0.1, 0.05, 0.1, 0.3, 0.6, 0.15, 0.15]
+        for x in xs:
+            b.set_pose(Pose.from_xyz(x, 0.0, 0.5))
+            sim.step_once()
+        # touching (within 0.02 m of contact) from x=0.19 to x=0.1, apart at 0.3, again at 0.15
+        assert log == [("start", 3), ("end", 7), ("start", 9)]
+        assert sim.collision_count == 2 and mine == [b, b]
+        assert sim.get_active_collision_pairs() == [(a.object_id, b.object_id)]
+
+
+def test_removing_an_object_ends_its_contacts():
+    with make_sim() as sim:
+        a, b = cube(sim, 0.0), cube(sim, 0.15)
+        ended = []
+        sim.events.on(SimEvents.COLLISION_ENDED, lambda **kw: ended.append(1))
+        sim.step_once()
+        assert sim.get_active_collision_pairs()
+        sim.remove_object(b)
+        sim.step_once()
+        assert sim.get_active_collision_pairs() == [] and ended == [1]
+        assert a.sim_core is sim
+
+
+def test_check_frequency():
+    with make_sim(collision_check_frequency=2.0) as sim:
+        a, b = cube(sim, 0.0), cube(sim, 5.0)
+        starts = []
+        sim.events.on(SimEvents.COLLISION_STARTED, lambda **kw: starts.append(sim.step_count))
+        b.set_pose(Pose.from_xyz(0.15, 0, 0.5))
+        for _ in range(12):
+            sim.step_once()
+        assert starts == [0]  # checked at steps 0, 5, 10: the contact is seen at step 0
+        sim.set_collision_check_frequency(0)
+        b.set_pose(Pose.from_xyz(5.0, 0, 0.5))
+        for _ in range(12):
+            sim.step_once()
+        assert sim.get_active_collision_pairs() == [(a.object_id, b.object_id)]  # never re-checked
+        sim.set_collision_check_frequency(None)
+        sim.step_once()
+        assert sim.get_active_collision_pairs() == []
+        with pytest.raises(ValueError, match="collision_check_frequency"):
+            sim.set_collision_check_frequency(-1)
+
+
+def test_static_wall_is_registered_once(sim):
+    wall = SimObject.from_mesh(
+        ShapeParams("box", half_extents=[5, 0.1, 1]),
+        ShapeParams("box", half_extents=[5, 0.1, 1]),
+        Pose.from_xyz(0, 0, 1),
+        sim_core=sim,
+        collision_mode="static",
+    )
+    robot = cube(sim, 0.0, y=2.0)
+    sim.step_once()
+    collision = sim._collision
+    registered = collision.registrations
+    for i in range(50):
+        robot.set_pose(Pose.from_xyz(0.01 * i, 2.0, 0.5))
+        sim.step_once()
+    assert collision.registrations == registered == 2
+    aabb_min, aabb_max = sim.get_aabbs()[wall.object_id]
+    assert aabb_min == pytest.approx([-5, -0.1, 0]) and aabb_max == pytest.approx([5, 0.1, 2])
+
+
+def test_rotated_aabb_is_tight():
+    with make_sim() as sim:
+        slab = SimObject.from_mesh(
+            ShapeParams("box", half_extents=[1.0, 0.1, 0.1]),
+            ShapeParams("box", half_extents=[1.0, 0.1, 0.1]),
+            Pose.from_euler(0, 0, 0.5, yaw=np.pi / 2),
+            sim_core=sim,
+        )
+        lo, hi = sim.get_aabbs()[slab.object_id]
+        assert lo == pytest.approx([-0.1, -1.0, 0.4]) and hi == pytest.approx([0.1, 1.0, 0.6])
+        pybullet_lo, pybullet_hi = p.getAABB(slab.body_id, physicsClientId=sim.client)
+        assert np.all(np.array(lo) >= np.array(pybullet_lo) - 1e-6)
+        assert np.all(np.array(hi) <= np.array(pybullet_hi) + 1e-6)
+
+
+def test_collision_color_change_and_restore():
+    with make_sim(enable_collision_color_change=True) as sim:
+        a, b = cube(sim, 0.0), cube(sim, 3.0)
+        original = p.getVisualShapeData(a.body_id, physicsClientId=sim.client)[0][7]
+        b.set_pose(Pose.from_xyz(0.15, 0, 0.5))
+        sim.step_once()
+        assert p.getVisualShapeData(a.body_id, physicsClientId=sim.client)[0][7] == pytest.approx(
+            sim.collision_color
+        )
+        b.set_pose(Pose.from_xyz(3.0, 0, 0.5))
+        sim.step_once()
+        assert p.getVisualShapeData(a.body_id, physicsClientId=sim.client)[0][7] == pytest.approx(
+            original
+        )
+
+
+def test_profiling_and_cell_size_modes(sim):
+    for i in range(10):
+        cube(sim, 0.15 * i)
+    pairs, timings = sim.check_collisions(return_profiling=True)
+    assert len(pairs) == 9
+    assert set(timings) >= {
+        "get_aabbs",
+        "spatial_hashing",
+        "aabb_filtering",
+        "contact_points",
+        "total",
+    }
+    _, none = sim.filter_aabb_pairs()
+    assert none is None
+    assert (
+        sim.set_collision_spatial_hash_cell_size_mode(
+            SpatialHashCellSizeMode.CONSTANT, cell_size=3.0
+        )
+        == 3.0
+    )
+    assert sim.set_collision_spatial_hash_cell_size_mode(
+        SpatialHashCellSizeMode.AUTO_ADAPTIVE
+    ) == pytest.approx(0.4)
+    with pytest.raises(ValueError, match="cell_size"):
+        sim.set_collision_spatial_hash_cell_size_mode("constant", cell_size=-1)
+
+
+def _brute_force(amin, amax, flat, moved):
+    n = len(amin)
+    out = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            if not (moved[i] or moved[j]):
+                continue
+            ignore_z = np.array([flat[i] or flat[j]])
+            if aabb_overlap(
+                amin[i : i + 1], amax[i : i + 1], amin[j : j + 1], amax[j : j + 1], ignore_z
+            )[0]:
+                out.append((i, j))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_broad_phase_matches_brute_force_on_random_scenes(seed):
+    rng = np.random.default_rng(seed)
+    n = 300
+    center = rng.uniform(-10, 10, (n, 3)) * [1, 1, 0.2]
+    size = rng.uniform(0.05, 0.6, (n, 3))
+    size[rng.random(n) < 0.03] *= 25  # a few huge objects span many cells
+    amin, amax = center - size, center + size
+    flat = rng.random(n) < 0.3
+    moved = rng.random(n) < 0.5
+    cell = float(rng.uniform(0.3, 2.0))
+    idx = candidate_pairs(amin, amax, flat, moved, cell, 1.5)
+    ignore_z = flat[idx[:, 0]] | flat[idx[:, 1]]
+    kept = idx[
+        aabb_overlap(amin[idx[:, 0]], amax[idx[:, 0]], amin[idx[:, 1]], amax[idx[:, 1]], ignore_z)
+    ]
+    assert [tuple(x) for x in kept.tolist()] == _brute_force(amin, amax, flat, moved)
+
+
+def test_simulated_scene_matches_brute_force_narrow_phase():
+    rng = np.random.default_rng(7)
+    with make_sim(collision_margin=0.02) as sim:
+        objs = [cube(sim, *rng.uniform(-2, 2, 2), z=0.5) for _ in range(80)]
+        pairs, _ = sim.check_collisions()
+        expected = []
+        for i, a in enumerate(objs):
+            for b in objs[i + 1 :]:
+                if p.getClosestPoints(a.body_id, b.body_id, 0.02, physicsClientId=sim.client):
+                    expected.append((a.object_id, b.object_id))
+        assert pairs == sorted(expected) and len(expected) > 5
