@@ -10,6 +10,7 @@ queue (``core/action_queue.py``).
 from __future__ import annotations
 
 import logging
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -53,6 +54,17 @@ def _waypoints(path: Any) -> list[Pose]:
             return list(path)
         raise ValueError(f"set_path: waypoint {bad} is not a Pose: {path[bad]!r}")
     raise ValueError(f"set_path: expected a Path, a Pose or a list of Poses, got {path!r}")
+
+
+def _construct_or_remove_body(
+    cls: type[Agent], sim_core: MultiRobotSimulationCore | None, body: int, **kwargs: Any
+) -> Agent:
+    """Build the agent around a body this module created; remove the body if that fails."""
+    try:
+        return cls(body, sim_core=sim_core, **kwargs)
+    except Exception:
+        p.removeBody(body, physicsClientId=0 if sim_core is None else sim_core.client)
+        raise
 
 
 class Agent(SimObject):
@@ -156,12 +168,13 @@ class Agent(SimObject):
             if spawn_params.kind == "virtual":
                 mode = CollisionMode.DISABLED
             body = create_body(spawn_params, sim_core)
-            agent = cls(
+            agent = _construct_or_remove_body(
+                cls,
+                sim_core,
                 body,
                 motion_mode=spawn_params.motion_mode,
                 use_fixed_base=spawn_params.use_fixed_base,
                 collision_mode=mode,
-                sim_core=sim_core,
                 name=spawn_params.name,
                 user_data=dict(spawn_params.user_data),
                 mass=spawn_params.mass,
@@ -170,8 +183,13 @@ class Agent(SimObject):
                 notify_spawn=False,
             )
         agent.pickable = spawn_params.pickable
-        for i, entry in enumerate(spawn_params.plugins or []):
-            agent.add_plugin(create_agent_plugin(agent, entry, where=f"plugins[{i}]"))
+        try:
+            for i, entry in enumerate(spawn_params.plugins or []):
+                agent.add_plugin(create_agent_plugin(agent, entry, where=f"plugins[{i}]"))
+        except Exception:
+            if sim_core is not None:  # never leave a half-built agent behind
+                sim_core.remove_object(agent)
+            raise
         if sim_core is not None:
             sim_core.world.announce(agent)
         return agent
@@ -244,13 +262,14 @@ class Agent(SimObject):
         if mass == 0.0:
             for link in range(-1, p.getNumJoints(body, physicsClientId=client)):
                 p.changeDynamics(body, link, mass=0.0, physicsClientId=client)
-        return cls(
+        return _construct_or_remove_body(
+            cls,
+            sim_core,
             body,
             urdf_path=path,
             motion_mode=motion_mode,
             use_fixed_base=use_fixed_base,
             collision_mode=collision_mode,
-            sim_core=sim_core,
             name=name,
             user_data=user_data,
             mass=mass,
@@ -263,8 +282,10 @@ class Agent(SimObject):
     # ----- controllers --------------------------------------------------------------------
 
     def _install_chain(self, chain: list[Controller]) -> None:
-        for old in self._controllers:
-            old.on_remove(self)
+        old = self._controllers
+        for ctrl in old:
+            if not any(ctrl is c for c in chain):
+                ctrl.on_remove(self)
         self._release_slot()
         self._controllers = chain
         base = self.controller
@@ -272,7 +293,8 @@ class Agent(SimObject):
         if sim is not None and isinstance(base, KinematicController) and base.vectorized:
             self._slot = sim.fleet.add_slot(self, base.kind)
         for ctrl in chain:
-            ctrl.on_install(self)
+            if not any(ctrl is c for c in old):
+                ctrl.on_install(self)
         if sim is not None:
             sim.fleet.track(self)
 
@@ -303,13 +325,19 @@ class Agent(SimObject):
         return self._slot
 
     def set_controller(self, controller: Any = None) -> None:
-        """Replace the base controller (keeping high-level ones); None disables movement."""
-        self.stop()
+        """Replace the base controller (keeping high-level ones); None disables movement.
+
+        A mapping without ``type``/``class`` keeps the current kind with new params.
+        """
         rest = self._controllers[1:]
         if controller is None:
+            self.stop()
             self._install_chain([])
             return
+        if isinstance(controller, dict) and "type" not in controller and "class" not in controller:
+            controller = {"type": self.motion_mode.value, **controller}
         ctrl = controller if isinstance(controller, Controller) else create_controller(controller)
+        self.stop()
         if not ctrl.is_base:
             raise ValueError(
                 f"set_controller: {type(ctrl).__name__} is not a base controller; "
@@ -366,6 +394,12 @@ class Agent(SimObject):
         Raises:
             ValueError: while the agent is moving.
         """
+        warnings.warn(
+            "Agent.set_motion_mode is deprecated; "
+            "use agent.set_controller('omni' | 'differential')",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         mode = coerce_enum(MotionMode, mode, "motion_mode")
         if self.is_moving:
             raise ValueError(

@@ -39,7 +39,7 @@ def aabb_overlap(
     """Row-wise AABB overlap (touching counts); Z is skipped where ``ignore_z`` is set."""
     sep = (amin > bmax) | (bmin > amax)
     sep[:, 2] &= ~ignore_z
-    return ~sep.any(axis=1)
+    return np.logical_not(sep.any(axis=1))
 
 
 def candidate_pairs(

@@ -367,7 +367,11 @@ CONTROLLER_REGISTRY: dict[str, type[Controller]] = {
 
 
 def register_controller(name: str, cls: type[Controller]) -> None:
-    """Make ``cls`` available as ``controller: {type: name}``."""
+    """Make ``cls`` available as ``controller: {type: name}``.
+
+    ``create_controller`` calls ``cls(params=ControllerParams(...), **other_keys)``, so the
+    class must accept a ``params`` keyword.
+    """
     if not (isinstance(cls, type) and issubclass(cls, Controller)):
         raise TypeError(f"register_controller: {cls!r} is not a Controller subclass")
     CONTROLLER_REGISTRY[name] = cls
@@ -376,6 +380,11 @@ def register_controller(name: str, cls: type[Controller]) -> None:
 def _controller_class(spec: dict[str, Any], where: str) -> type[Controller]:
     if "type" in spec and "class" in spec:
         raise ValueError(f"{where}: give either 'type' or 'class', not both")
+    if "type" not in spec and "class" not in spec:
+        raise ValueError(
+            f"{where}: a controller mapping needs 'type' (one of {sorted(CONTROLLER_REGISTRY)}) "
+            f"or 'class' (a dotted path), got {spec!r}"
+        )
     if "class" in spec:
         cls = resolve_class(str(spec["class"]))
         if not (isinstance(cls, type) and issubclass(cls, Controller)):
@@ -444,6 +453,11 @@ def build_controller_chain(
         if not isinstance(ctrl, Controller):
             raise ValueError(f"{where}: expected a name, mapping or Controller, got {entry!r}")
         if ctrl.is_base:
+            if base is not None:
+                raise ValueError(
+                    f"{where}: a second base controller ({type(ctrl).__name__}); a chain has one "
+                    f"base (already {type(base).__name__}) plus high-level controllers"
+                )
             # motion_mode defaults to DIFFERENTIAL, so only an explicit OMNIDIRECTIONAL that a
             # differential controller contradicts is worth a warning.
             if (

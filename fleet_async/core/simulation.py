@@ -466,7 +466,7 @@ class MultiRobotSimulationCore:
         ids = self._world.store.object_id[rows].tolist() if len(rows) else []
         pairs = sorted(tuple(sorted(pair)) for pair in ids)
         timings["total"] = (time.perf_counter() - t0) * 1e3
-        return pairs, timings if return_profiling else None  # type: ignore[return-value]
+        return pairs, timings if return_profiling else None
 
     def check_collisions(
         self,
