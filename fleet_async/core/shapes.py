@@ -19,7 +19,15 @@ from fleet_async.core.geometry import Pose
 from fleet_async.core.paths import resolve_data_file
 from fleet_async.core.pose_config import pose_from_config
 
-__all__ = ["SHAPE_TYPES", "ShapeParams", "clear_shape_cache", "get_or_create_shapes"]
+__all__ = [
+    "SHAPE_TYPES",
+    "ShapeParams",
+    "body_collision_shape",
+    "clear_shape_cache",
+    "forget_body_shape",
+    "get_or_create_shapes",
+    "record_body_shape",
+]
 
 SHAPE_TYPES = ("box", "sphere", "cylinder", "mesh")
 
@@ -120,13 +128,38 @@ class ShapeParams:
 _SHAPE_CACHE: dict[tuple[int, bool, tuple[Any, ...]], int] = {}
 
 
+# (client id, body id) -> the single collision shape a body was built from. The collision
+# system queries PyBullet with (shape, pose from the state store) for these bodies, so their
+# poses never need to be pushed to PyBullet just for a distance query.
+_BODY_SHAPES: dict[tuple[int, int], int] = {}
+
+
+def record_body_shape(client: int, body: int, collision_shape: int) -> None:
+    """Remember that ``body`` is exactly ``collision_shape`` at its base pose."""
+    if collision_shape >= 0:
+        _BODY_SHAPES[(client, body)] = collision_shape
+
+
+def body_collision_shape(client: int, body: int) -> int:
+    """The single collision shape ``body`` was built from, or -1 if unknown / compound."""
+    return _BODY_SHAPES.get((client, body), -1)
+
+
+def forget_body_shape(client: int, body: int) -> None:
+    """Drop the record of a removed body."""
+    _BODY_SHAPES.pop((client, body), None)
+
+
 def clear_shape_cache(client: int | None = None) -> None:
     """Forget cached shape ids of one client (after its world reset), or of all clients."""
     if client is None:
         _SHAPE_CACHE.clear()
+        _BODY_SHAPES.clear()
         return
     for key in [k for k in _SHAPE_CACHE if k[0] == client]:
         del _SHAPE_CACHE[key]
+    for body_key in [k for k in _BODY_SHAPES if k[0] == client]:
+        del _BODY_SHAPES[body_key]
 
 
 def _create_shape(

@@ -16,12 +16,13 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 import pybullet as p
 
+from fleet_async.core.bulk import create_bodies, wrap_all
 from fleet_async.core.events import EventBus
 from fleet_async.core.geometry import Pose
 from fleet_async.core.logging_utils import NamedLazyLogger
 from fleet_async.core.paths import resolve_data_file
 from fleet_async.core.scheduling import PeriodicSchedule
-from fleet_async.core.shapes import ShapeParams, get_or_create_shapes
+from fleet_async.core.shapes import ShapeParams, get_or_create_shapes, record_body_shape
 from fleet_async.core.spawn_params import SimObjectSpawnParams
 from fleet_async.core.state import COLLISION_CODES, KinematicState
 from fleet_async.core.tools import find_nearest
@@ -393,6 +394,31 @@ class SimObject:
         )
 
     @classmethod
+    def spawn_batch(
+        cls, params_list: Sequence[SimObjectSpawnParams], sim_core: MultiRobotSimulationCore
+    ) -> list[SimObject]:
+        """Spawn many shape-based objects fast (bodies created in batches); input order kept.
+
+        If anything fails, nothing this call created is left behind.
+        """
+        params_list = list(params_list)
+        with sim_core.batch_spawn():
+            bodies = create_bodies(params_list, sim_core)
+            return wrap_all(
+                bodies,
+                lambda i, body: cls(
+                    body,
+                    sim_core=sim_core,
+                    pickable=params_list[i].pickable,
+                    mass=params_list[i].mass,
+                    collision_mode=params_list[i].collision_mode,
+                    name=params_list[i].name,
+                    user_data=dict(params_list[i].user_data),
+                ),
+                sim_core,
+            )
+
+    @classmethod
     def from_mesh(
         cls,
         visual_shape: ShapeParams | None = None,
@@ -524,4 +550,5 @@ def create_body(params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore
     )
     if body < 0:
         raise ValueError(f"PyBullet could not create a body from {params!r}")
+    record_body_shape(client, int(body), collision_id)
     return int(body)

@@ -224,7 +224,7 @@ def test_profiling_and_cell_size_modes(sim):
     )
     assert sim.set_collision_spatial_hash_cell_size_mode(
         SpatialHashCellSizeMode.AUTO_ADAPTIVE
-    ) == pytest.approx(0.4)
+    ) == pytest.approx(0.6)
     with pytest.raises(ValueError, match="cell_size"):
         sim.set_collision_spatial_hash_cell_size_mode("constant", cell_size=-1)
 

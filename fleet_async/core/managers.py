@@ -1,0 +1,799 @@
+"""Managers: bookkeeping and bulk operations over a group of objects or agents.
+
+:class:`SimObjectManager` tracks a group of SimObjects (``objects``, ``body_ids``,
+``object_ids``, always the same length and order) and spawns them on grids, in batches or from
+config. :class:`AgentManager` adds goals, actions, callbacks and fleet-wide controller settings
+for agents. A manager with a simulation registers itself there (``sim.register_manager``), so
+``sim.remove_object`` and ``sim.reset`` keep its lists in sync.
+
+Randomised grid spawning draws from the simulation's generator (``sim.rng``), so a run is
+reproduced by its seed. A spawn call that fails part-way keeps what it already spawned
+(registered in the simulation and in the manager) and re-raises the error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from collections.abc import Callable, Iterable, Sequence
+from contextlib import AbstractContextManager, nullcontext
+from pathlib import Path as FsPath
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
+
+import numpy as np
+
+from fleet_async.core.agent import Agent
+from fleet_async.core.agent_params import AgentSpawnParams
+from fleet_async.core.config_utils import load_yaml_config, resolve_class
+from fleet_async.core.controllers import (
+    CONTROLLER_REGISTRY,
+    Controller,
+    ControllerParams,
+    DifferentialController,
+    KinematicController,
+    OmniController,
+)
+from fleet_async.core.geometry import Pose
+from fleet_async.core.grid_spawn import (
+    GridSpawnParams,
+    assign_by_counts,
+    assign_by_probability,
+    assign_first_cells,
+)
+from fleet_async.core.sim_object import SimObject
+from fleet_async.core.spawn_params import SimObjectSpawnParams
+
+if TYPE_CHECKING:
+    from fleet_async.core.action import Action
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = [
+    "ENTITY_REGISTRY",
+    "AgentManager",
+    "GridSpawnParams",
+    "SimObjectManager",
+    "get_entity_class",
+    "register_entity_class",
+]
+
+logger = logging.getLogger(__name__)
+
+T = TypeVar("T", bound=SimObject)
+
+ENTITY_REGISTRY: dict[str, type[SimObject]] = {"agent": Agent, "sim_object": SimObject}
+"""Entity ``type:`` names and the classes ``spawn_from_config`` builds for them."""
+
+
+def register_entity_class(name: str, cls: type[SimObject] | str) -> None:
+    """Make ``cls`` spawnable as ``type: name`` in entity configs.
+
+    Args:
+        name: The ``type:`` value.
+        cls: A SimObject subclass, or its dotted path ``"package.module.ClassName"``.
+
+    Raises:
+        ValueError: for an empty name.
+        TypeError: if ``cls`` is not a SimObject subclass.
+    """
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"register_entity_class: expected a non-empty name, got {name!r}")
+    resolved = resolve_class(cls) if isinstance(cls, str) else cls
+    if not (isinstance(resolved, type) and issubclass(resolved, SimObject)):
+        raise TypeError(f"register_entity_class({name!r}): {cls!r} is not a SimObject subclass")
+    ENTITY_REGISTRY[name] = resolved
+
+
+def get_entity_class(name: str) -> type[SimObject]:
+    """The class registered as ``type: name``.
+
+    Raises:
+        ValueError: for an unknown name, listing the known ones.
+    """
+    cls = ENTITY_REGISTRY.get(name) if isinstance(name, str) else None
+    if cls is None:
+        raise ValueError(f"unknown entity type {name!r}; known types: {sorted(ENTITY_REGISTRY)}")
+    return cls
+
+
+def _check_params(params: Any, what: str) -> SimObjectSpawnParams:
+    if not isinstance(params, SimObjectSpawnParams):
+        raise TypeError(f"{what}: expected spawn params, got {params!r}")
+    return params
+
+
+class SimObjectManager(Generic[T]):
+    """Tracks a group of simulation objects and spawns them in bulk.
+
+    Args:
+        sim_core: The simulation; None until an object of a simulation is added.
+        object_class: Class the spawn methods instantiate (SimObject or a subclass).
+        enable_profiling: Log each spawn call's elapsed time at INFO.
+
+    Attributes:
+        objects: Managed objects, in the order added.
+        body_ids: ``objects[i].body_id``.
+        object_ids: ``objects[i].object_id``.
+        sim_core: The simulation, or None.
+        object_class: Class the spawn methods instantiate.
+        enable_profiling: Whether spawn calls log their elapsed time.
+    """
+
+    _managed_type: ClassVar[type[SimObject]] = SimObject
+
+    def __init__(
+        self,
+        sim_core: MultiRobotSimulationCore | None = None,
+        object_class: type[SimObject] = SimObject,
+        enable_profiling: bool = False,
+    ) -> None:
+        if not (isinstance(object_class, type) and issubclass(object_class, self._managed_type)):
+            raise TypeError(
+                f"{type(self).__name__}.object_class: expected a "
+                f"{self._managed_type.__name__} subclass, got {object_class!r}"
+            )
+        self.object_class = object_class
+        self.enable_profiling = bool(enable_profiling)
+        self.objects: list[T] = []
+        self.body_ids: list[int] = []
+        self.object_ids: list[int] = []
+        self._by_object_id: dict[int, T] = {}
+        self.sim_core: MultiRobotSimulationCore | None = None
+        if sim_core is not None:
+            self._attach(sim_core)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(objects={len(self.objects)})"
+
+    def _attach(self, sim: MultiRobotSimulationCore) -> None:
+        """Join ``sim`` so its removals and resets reach this manager."""
+        sim.register_manager(self)  # sets self.sim_core
+
+    # ----- bookkeeping --------------------------------------------------------------------
+
+    def add_object(self, obj: T) -> None:
+        """Track ``obj``; it must already be part of the simulation.
+
+        An object with ``object_id < 0`` (created without a simulation) is skipped with a
+        warning; one already tracked is ignored. A manager without a simulation joins the
+        object's simulation.
+
+        Raises:
+            TypeError: for an object this manager cannot manage.
+            ValueError: for an object of another simulation than the manager's.
+        """
+        if not isinstance(obj, self._managed_type):
+            raise TypeError(
+                f"{type(self).__name__}.add_object: expected a {self._managed_type.__name__}, "
+                f"got {obj!r}"
+            )
+        if obj.object_id < 0 or obj.sim_core is None:
+            logger.warning("add_object: skipping %r, it is not part of a simulation", obj)
+            return
+        if self._by_object_id.get(obj.object_id) is obj:
+            return
+        if self.sim_core is None:
+            self._attach(obj.sim_core)
+        elif obj.sim_core is not self.sim_core:
+            raise ValueError(f"add_object: {obj!r} belongs to another simulation")
+        self.objects.append(obj)
+        self.body_ids.append(obj.body_id)
+        self.object_ids.append(obj.object_id)
+        self._by_object_id[obj.object_id] = obj
+
+    def remove_object(self, obj: T) -> bool:
+        """Stop tracking ``obj`` (the simulation and PyBullet are not touched).
+
+        ``sim.remove_object`` calls this on every registered manager.
+
+        Returns:
+            True if ``obj`` was tracked, False otherwise.
+        """
+        if self._by_object_id.get(obj.object_id) is not obj:
+            return False
+        i = self.object_ids.index(obj.object_id)
+        del self.objects[i], self.body_ids[i], self.object_ids[i]
+        del self._by_object_id[obj.object_id]
+        return True
+
+    def clear(self) -> None:
+        """Stop tracking every object (``sim.reset`` calls this); the simulation is untouched."""
+        self.objects.clear()
+        self.body_ids.clear()
+        self.object_ids.clear()
+        self._by_object_id.clear()
+
+    def get_object_count(self) -> int:
+        """Number of managed objects."""
+        return len(self.objects)
+
+    # ----- poses --------------------------------------------------------------------------
+
+    def _at(self, index: int, what: str) -> T:
+        if not -len(self.objects) <= index < len(self.objects):
+            raise IndexError(f"{what}: index {index} out of range for {len(self.objects)} objects")
+        return self.objects[index]
+
+    def get_pose(self, object_index: int) -> Pose:
+        """Current pose of ``objects[object_index]``.
+
+        Raises:
+            IndexError: for an index out of range.
+        """
+        return self._at(object_index, "get_pose").get_pose()
+
+    def get_all_poses(self) -> list[Pose]:
+        """Current poses of every object, in ``objects`` order."""
+        return [obj.get_pose() for obj in self.objects]
+
+    def get_poses_dict(self) -> dict[int, Pose]:
+        """``{object_id: pose}`` for every object."""
+        return {obj.object_id: obj.get_pose() for obj in self.objects}
+
+    def set_pose_all(self, pose_factory: Callable[[T], Pose]) -> None:
+        """``obj.set_pose(pose_factory(obj))`` for every object, in order."""
+        for obj in list(self.objects):
+            obj.set_pose(pose_factory(obj))
+
+    # ----- spawning -----------------------------------------------------------------------
+
+    def spawn_objects_grid(
+        self, num_objects: int, grid_params: GridSpawnParams, spawn_params: SimObjectSpawnParams
+    ) -> list[T]:
+        """Spawn ``num_objects`` copies of ``spawn_params`` on the first cells of the grid.
+
+        Object ``i`` goes to cell ``i`` (X fastest, then Y, then Z) with the orientation of
+        ``spawn_params.initial_pose``.
+
+        Raises:
+            ValueError: if ``num_objects`` is negative or exceeds ``grid_params.total_cells``.
+        """
+        _check_params(spawn_params, "spawn_objects_grid.spawn_params")
+        cells, kinds = assign_first_cells(grid_params, num_objects)
+        return self._spawn_on_cells(grid_params, cells, kinds, [spawn_params], "spawn_objects_grid")
+
+    def spawn_grid_mixed(
+        self,
+        num_objects: int,
+        grid_params: GridSpawnParams,
+        spawn_params_list: Sequence[tuple[SimObjectSpawnParams, float]],
+    ) -> list[T]:
+        """Fill the first ``num_objects`` cells, each with a type drawn by probability.
+
+        One uniform draw from ``sim_core.rng`` per cell picks type ``i`` with probability
+        ``p_i``; a cell whose draw falls past the sum of the probabilities stays empty, so at
+        most ``num_objects`` objects spawn.
+
+        Args:
+            num_objects: Cells to visit (<= ``grid_params.total_cells``).
+            grid_params: The grid.
+            spawn_params_list: ``(spawn_params, probability)`` pairs; each probability in
+                [0, 1], their sum <= 1.
+
+        Raises:
+            ValueError: for bad probabilities, too many objects, or no simulation.
+        """
+        what = "spawn_grid_mixed"
+        params, probs = self._unpack(spawn_params_list, what)
+        cells, kinds = assign_by_probability(grid_params, num_objects, probs, self._rng(what))
+        return self._spawn_on_cells(grid_params, cells, kinds, params, what)
+
+    def spawn_grid_counts(
+        self,
+        grid_params: GridSpawnParams,
+        spawn_params_count_list: Sequence[tuple[SimObjectSpawnParams, int]],
+    ) -> list[T]:
+        """Spawn exactly ``count`` objects of each type on cells shuffled with ``sim_core.rng``.
+
+        Objects are returned (and tracked) in cell order; cells left over stay empty.
+
+        Raises:
+            ValueError: if the total count exceeds ``grid_params.total_cells``, for a negative
+                count, or without a simulation.
+        """
+        what = "spawn_grid_counts"
+        params, counts = self._unpack(spawn_params_count_list, what)
+        cells, kinds = assign_by_counts(grid_params, counts, self._rng(what))
+        return self._spawn_on_cells(grid_params, cells, kinds, params, what)
+
+    def spawn_objects_batch(self, params_list: Sequence[SimObjectSpawnParams]) -> list[T]:
+        """Spawn one object per params with GUI rendering suspended (``sim_core.batch_spawn``)."""
+        prepared = [
+            self._prepare_params(_check_params(prm, f"spawn_objects_batch[{i}]"))
+            for i, prm in enumerate(params_list)
+        ]
+        return self._spawn_each((self._maker(prm) for prm in prepared), "spawn_objects_batch")
+
+    def spawn_from_config(
+        self, entities_yaml: Sequence[dict[str, Any]], *, source: str | None = None
+    ) -> list[T]:
+        """Spawn entities from config mappings, dispatching on their ``type:`` (default "agent").
+
+        Each mapping (without ``type``) goes to ``cls.from_dict(mapping, sim_core)`` of the
+        registered class (see :func:`register_entity_class`). Types are checked for every entry
+        before anything spawns.
+
+        Raises:
+            ValueError: for an unknown type (listing the known ones), a type this manager cannot
+                manage, or a bad entry, naming ``entities[i]`` and ``source``.
+        """
+        return self._spawn_entities(entities_yaml, "entities", source)
+
+    def spawn_from_yaml(self, yaml_path: str | FsPath, key: str = "entities") -> list[T]:
+        """Spawn the entities listed under ``key`` in a YAML file (``[]`` if it has no ``key``).
+
+        Raises:
+            FileNotFoundError: if ``yaml_path`` does not exist.
+            ValueError: as :meth:`spawn_from_config`, naming the file.
+        """
+        entries = load_yaml_config(yaml_path).get(key)
+        if entries is None:
+            return []
+        return self._spawn_entities(entries, key, str(yaml_path))
+
+    # ----- spawning internals -------------------------------------------------------------
+
+    def _prepare_params(self, params: SimObjectSpawnParams) -> SimObjectSpawnParams:
+        """Adjust spawn params before use (AgentManager merges its fleet controller)."""
+        return params
+
+    def _prepare_config(self, cls: type[SimObject], config: dict[str, Any]) -> dict[str, Any]:
+        """Adjust an entity config before ``cls.from_dict`` (AgentManager hook)."""
+        return config
+
+    def _rng(self, what: str) -> np.random.Generator:
+        if self.sim_core is None:
+            raise ValueError(
+                f"{what}: needs the simulation's random generator; give the manager a sim_core"
+            )
+        return self.sim_core.rng
+
+    @staticmethod
+    def _unpack(pairs: Sequence[tuple[Any, Any]], what: str) -> tuple[list[Any], list[Any]]:
+        if not pairs:
+            raise ValueError(f"{what}: expected at least one (spawn_params, value) pair")
+        params, values = [], []
+        for i, pair in enumerate(pairs):
+            if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
+                raise ValueError(f"{what}: entry {i} is not a (spawn_params, value) pair: {pair!r}")
+            params.append(_check_params(pair[0], f"{what}: entry {i}"))
+            values.append(pair[1])
+        return params, values
+
+    def _maker(self, params: SimObjectSpawnParams) -> Callable[[], SimObject]:
+        return lambda: self.object_class.from_params(params, self.sim_core)
+
+    def _spawn_on_cells(
+        self,
+        grid: GridSpawnParams,
+        cells: np.ndarray,
+        kinds: np.ndarray,
+        params: list[SimObjectSpawnParams],
+        what: str,
+    ) -> list[T]:
+        """Spawn ``params[kinds[k]]`` at cell ``cells[k]``, keeping each type's orientation."""
+        positions = grid.cell_positions()
+        prepared = [self._prepare_params(prm) for prm in params]
+        makers = (
+            self._maker(
+                dataclasses.replace(
+                    prepared[kind],
+                    initial_pose=Pose(positions[cell], prepared[kind].initial_pose.orientation),
+                )
+            )
+            for cell, kind in zip(cells.tolist(), kinds.tolist(), strict=True)
+        )
+        return self._spawn_each(makers, what)
+
+    def _spawn_entities(self, entries: Any, key: str, source: str | None) -> list[T]:
+        where = f"{source}: " if source else ""
+        if not isinstance(entries, list):
+            raise ValueError(f"{where}{key}: expected a list of mappings, got {entries!r}")
+        plan: list[tuple[str, type[SimObject], dict[str, Any]]] = []
+        for i, entry in enumerate(entries):
+            label = f"{where}{key}[{i}]"
+            if not isinstance(entry, dict):
+                raise ValueError(f"{label}: expected a mapping, got {entry!r}")
+            config = dict(entry)
+            type_name = config.pop("type", "agent")
+            try:
+                cls = get_entity_class(type_name)
+            except ValueError as exc:
+                raise ValueError(f"{label}: {exc}") from None
+            if not issubclass(cls, self._managed_type):
+                raise ValueError(
+                    f"{label}: type {type_name!r} ({cls.__name__}) cannot join a "
+                    f"{type(self).__name__}, which manages {self._managed_type.__name__} objects"
+                )
+            plan.append((label, cls, self._prepare_config(cls, config)))
+        return self._spawn_each(
+            (self._entity_maker(label, cls, config) for label, cls, config in plan),
+            "spawn_from_config",
+        )
+
+    def _entity_maker(
+        self, label: str, cls: type[SimObject], config: dict[str, Any]
+    ) -> Callable[[], SimObject]:
+        def make() -> SimObject:
+            try:
+                return cls.from_dict(config, self.sim_core)
+            except ValueError as exc:
+                raise ValueError(f"{label}: {exc}") from exc
+
+        return make
+
+    def _spawn_each(self, makers: Iterable[Callable[[], SimObject]], what: str) -> list[T]:
+        """Create and track objects one by one; on an error the ones made so far stay tracked."""
+        start = time.perf_counter()
+        spawned: list[T] = []
+        batch: AbstractContextManager[Any] = (
+            self.sim_core.batch_spawn() if self.sim_core is not None else nullcontext()
+        )
+        with batch:
+            for make in makers:
+                obj = cast(T, make())
+                self.add_object(obj)
+                spawned.append(obj)
+        if self.enable_profiling:
+            elapsed_ms = (time.perf_counter() - start) * 1e3
+            logger.info("%s: spawned %d objects in %.1f ms", what, len(spawned), elapsed_ms)
+        return spawned
+
+
+def _selects_base(entry: Any) -> bool | None:
+    """Whether a controller entry selects a base controller; None when it cannot be told."""
+    if isinstance(entry, Controller):
+        return entry.is_base
+    cls: Any = None
+    if isinstance(entry, str):
+        cls = CONTROLLER_REGISTRY.get(entry)
+    elif isinstance(entry, dict):
+        if "class" in entry:
+            try:
+                cls = resolve_class(str(entry["class"]))
+            except (ValueError, ImportError, AttributeError):
+                return None
+        elif "type" in entry:
+            cls = CONTROLLER_REGISTRY.get(str(entry["type"]))
+        else:
+            return True  # params only: the agent's default base
+    return issubclass(cls, KinematicController) if isinstance(cls, type) else None
+
+
+def with_fleet_controller(spec: Any, fleet: dict[str, Any] | None) -> Any:
+    """Merge fleet-wide ControllerParams fields under an agent's own ``controller`` spec.
+
+    The fleet values go into the spec's base controller entry, the agent's own values winning;
+    a spec without a base entry (only high-level controllers) gets a params-only base entry
+    first. A ControllerParams, a base Controller instance, or a spec that names an unknown
+    controller is returned unchanged (the chain builder reports the latter).
+    """
+    if not fleet or isinstance(spec, ControllerParams):
+        return spec
+    if spec is None:
+        return dict(fleet)
+    single = not isinstance(spec, list)
+    entries = [spec] if single else list(spec)
+    kinds = [_selects_base(entry) for entry in entries]
+    if None in kinds:
+        return spec
+    if True in kinds:
+        i = kinds.index(True)
+        if isinstance(entries[i], Controller):
+            return spec
+        own = {"type": entries[i]} if isinstance(entries[i], str) else entries[i]
+        entries[i] = {**fleet, **own}
+    else:
+        entries.insert(0, dict(fleet))
+    return entries[0] if single and len(entries) == 1 else entries
+
+
+_BATCH_MODES: dict[str, type[KinematicController]] = {
+    "batch_omni": OmniController,
+    "batch_differential": DifferentialController,
+}
+
+
+def batch_controller_class(mode: str) -> type[KinematicController]:
+    """The base controller class for a batch mode name or a dotted class path.
+
+    Raises:
+        ValueError: naming ``mode`` and the accepted names, when it is neither.
+    """
+    accepted = f"accepted: {sorted(_BATCH_MODES)} or a dotted path to a KinematicController"
+    if isinstance(mode, str) and mode in _BATCH_MODES:
+        return _BATCH_MODES[mode]
+    if not (isinstance(mode, str) and "." in mode):
+        raise ValueError(f"enable_batch: unknown batch controller {mode!r}; {accepted}")
+    try:
+        cls = resolve_class(mode)
+    except (ValueError, ImportError, AttributeError) as exc:
+        raise ValueError(f"enable_batch: cannot resolve {mode!r} ({exc}); {accepted}") from exc
+    if not (isinstance(cls, type) and issubclass(cls, KinematicController)):
+        raise ValueError(f"enable_batch: {mode!r} is not a KinematicController; {accepted}")
+    return cls
+
+
+class AgentManager(SimObjectManager[Agent]):
+    """A SimObjectManager for agents: goals, actions, callbacks and fleet-wide controllers.
+
+    Args:
+        sim_core: The simulation.
+        name: Name under which ``sim_core.get_manager(name)`` finds this manager.
+        update_frequency: Default frequency (Hz of sim time) of :meth:`register_callback`.
+        object_class: Agent class the spawn methods instantiate.
+        enable_profiling: Log each spawn call's elapsed time at INFO.
+        batch_controller: Same as calling :meth:`enable_batch` with it.
+        fleet_controller: ControllerParams fields (e.g. ``{"max_linear_vel": 2.0}``) applied to
+            agents spawned through this manager; an agent's own ``controller`` values win.
+
+    Attributes:
+        name: The manager's name, or None.
+        update_frequency: Default callback frequency in Hz.
+        fleet_controller: The fleet-wide ControllerParams fields, or None.
+    """
+
+    _managed_type: ClassVar[type[SimObject]] = Agent
+
+    def __init__(
+        self,
+        sim_core: MultiRobotSimulationCore | None = None,
+        name: str | None = None,
+        update_frequency: float = 10.0,
+        object_class: type[Agent] = Agent,
+        enable_profiling: bool = False,
+        batch_controller: str | None = None,
+        fleet_controller: dict[str, Any] | None = None,
+    ) -> None:
+        if name is not None and not isinstance(name, str):
+            raise ValueError(f"AgentManager.name: expected a string or None, got {name!r}")
+        if sim_core is not None and name is not None and sim_core.get_manager(name) is not None:
+            raise ValueError(f"AgentManager.name: a manager named {name!r} is already registered")
+        self.name = name
+        self.update_frequency = _frequency(update_frequency, "AgentManager.update_frequency")
+        self.fleet_controller = _fleet_controller(fleet_controller)
+        self._batch_mode: str | None = None
+        self._batch_class: type[KinematicController] | None = None
+        self._pending_callbacks: list[tuple[Callable[[Any, float], Any], float]] = []
+        super().__init__(sim_core, object_class, enable_profiling)
+        if batch_controller is not None:
+            self.enable_batch(batch_controller)
+
+    def __repr__(self) -> str:
+        return f"AgentManager(name={self.name!r}, objects={len(self.objects)})"
+
+    def _attach(self, sim: MultiRobotSimulationCore) -> None:
+        super()._attach(sim)
+        for wrapper, frequency in self._pending_callbacks:
+            sim.register_callback(wrapper, frequency)
+        self._pending_callbacks.clear()
+
+    def add_object(self, obj: Agent) -> None:
+        """Track ``obj`` (see :meth:`SimObjectManager.add_object`) and apply the batch mode."""
+        super().add_object(obj)
+        if self._batch_class is not None and self._by_object_id.get(obj.object_id) is obj:
+            self._apply_batch(obj)
+
+    # ----- spawning -----------------------------------------------------------------------
+
+    def spawn_agents_grid(
+        self, num_agents: int, grid_params: GridSpawnParams, spawn_params: AgentSpawnParams
+    ) -> list[Agent]:
+        """Alias of :meth:`spawn_objects_grid`."""
+        return self.spawn_objects_grid(num_agents, grid_params, spawn_params)
+
+    def spawn_agents_grid_mixed(
+        self,
+        num_agents: int,
+        grid_params: GridSpawnParams,
+        spawn_params_list: Sequence[tuple[SimObjectSpawnParams, float]],
+    ) -> list[Agent]:
+        """Alias of :meth:`spawn_grid_mixed`."""
+        return self.spawn_grid_mixed(num_agents, grid_params, spawn_params_list)
+
+    def spawn_agent_grid_counts(
+        self,
+        grid_params: GridSpawnParams,
+        spawn_params_count_list: Sequence[tuple[SimObjectSpawnParams, int]],
+    ) -> list[Agent]:
+        """Alias of :meth:`spawn_grid_counts`."""
+        return self.spawn_grid_counts(grid_params, spawn_params_count_list)
+
+    def _prepare_params(self, params: SimObjectSpawnParams) -> SimObjectSpawnParams:
+        if not self.fleet_controller or not isinstance(params, AgentSpawnParams):
+            return params
+        merged = with_fleet_controller(params.controller, self.fleet_controller)
+        return (
+            params
+            if merged is params.controller
+            else dataclasses.replace(params, controller=merged)
+        )
+
+    def _prepare_config(self, cls: type[SimObject], config: dict[str, Any]) -> dict[str, Any]:
+        if not self.fleet_controller or not issubclass(cls, Agent):
+            return config
+        return {
+            **config,
+            "controller": with_fleet_controller(config.get("controller"), self.fleet_controller),
+        }
+
+    # ----- goals and motion ---------------------------------------------------------------
+
+    def set_goal_pose(self, agent_index: int, goal: Pose) -> None:
+        """Send ``objects[agent_index]`` to ``goal``.
+
+        Raises:
+            IndexError: for an index out of range.
+        """
+        self._at(agent_index, "set_goal_pose").set_goal_pose(goal)
+
+    def set_goal_pose_by_body_id(self, body_id: int, goal: Pose) -> None:
+        """Send the agent with PyBullet ``body_id`` to ``goal``.
+
+        Raises:
+            KeyError: if no managed agent has that body id.
+        """
+        if body_id not in self.body_ids:
+            raise KeyError(f"set_goal_pose_by_body_id: no managed agent has body_id {body_id!r}")
+        self.objects[self.body_ids.index(body_id)].set_goal_pose(goal)
+
+    def set_goal_pose_by_object_id(self, object_id: int, goal: Pose) -> None:
+        """Send the agent with simulation ``object_id`` to ``goal``.
+
+        Raises:
+            KeyError: if no managed agent has that object id.
+        """
+        agent = self._by_object_id.get(object_id)
+        if agent is None:
+            raise KeyError(
+                f"set_goal_pose_by_object_id: no managed agent has object_id {object_id!r}"
+            )
+        agent.set_goal_pose(goal)
+
+    def set_goal_pose_all(self, goal_factory: Callable[[Agent], Pose]) -> None:
+        """``agent.set_goal_pose(goal_factory(agent))`` for every agent, in order."""
+        for agent in list(self.objects):
+            agent.set_goal_pose(goal_factory(agent))
+
+    def stop_all(self) -> None:
+        """Stop every agent and forget its goal."""
+        for agent in self.objects:
+            agent.stop()
+
+    def get_moving_count(self) -> int:
+        """Number of agents currently moving."""
+        return sum(1 for agent in self.objects if agent.is_moving)
+
+    def set_joints_targets_all(
+        self, targets_factory: Callable[[Agent], Sequence[float]], max_force: float = 500.0
+    ) -> None:
+        """``agent.set_joints_targets(targets_factory(agent), max_force=max_force)`` for arms.
+
+        Agents without joints, or without a ``set_joints_targets`` method, are skipped (the
+        factory is not called for them).
+        """
+        for agent in list(self.objects):
+            setter = getattr(agent, "set_joints_targets", None)
+            if callable(setter) and agent.get_num_joints() > 0:
+                setter(targets_factory(agent), max_force=max_force)
+
+    # ----- actions ------------------------------------------------------------------------
+
+    def add_action_sequence_all(self, action_factory: Callable[[Agent], Sequence[Action]]) -> None:
+        """``agent.add_action_sequence(action_factory(agent))`` for every agent, in order."""
+        for agent in list(self.objects):
+            agent.add_action_sequence(action_factory(agent))
+
+    def add_action_all(self, action_factory: Callable[[Agent], Action]) -> None:
+        """``agent.add_action(action_factory(agent))`` for every agent, in order."""
+        for agent in list(self.objects):
+            agent.add_action(action_factory(agent))
+
+    # ----- callbacks and camera -----------------------------------------------------------
+
+    def register_callback(
+        self, callback: Callable[[AgentManager, float], Any], frequency: float | None = None
+    ) -> None:
+        """Call ``callback(manager, dt)`` at ``frequency`` Hz of sim time.
+
+        Args:
+            callback: Receives this manager and the sim time (s) since its previous call.
+            frequency: Hz; None uses ``update_frequency``. Registered with the simulation now,
+                or as soon as the manager joins one.
+
+        Raises:
+            ValueError: if ``frequency`` is not a number > 0.
+        """
+        if not callable(callback):
+            raise TypeError(f"register_callback: callback is not callable: {callback!r}")
+        freq = self.update_frequency if frequency is None else frequency
+        freq = _frequency(freq, "register_callback.frequency")
+
+        def run(_sim: Any, dt: float) -> None:
+            callback(self, dt)
+
+        if self.sim_core is not None:
+            self.sim_core.register_callback(run, freq)
+        else:
+            self._pending_callbacks.append((run, freq))
+
+    def setup_camera(
+        self, camera_config: dict[str, Any] | None = None
+    ) -> tuple[float, float, float, list[float]]:
+        """Frame the camera on the managed agents (``sim_core.setup_camera``).
+
+        Returns:
+            (distance, yaw, pitch, target) of the view.
+
+        Raises:
+            ValueError: without a simulation.
+        """
+        if self.sim_core is None:
+            raise ValueError("setup_camera: the manager has no simulation (sim_core)")
+        positions = (
+            self.sim_core.get_poses(self.object_ids)[0].tolist() if self.object_ids else None
+        )
+        return self.sim_core.setup_camera(camera_config, entity_positions=positions)
+
+    # ----- batch mode ---------------------------------------------------------------------
+
+    @property
+    def batch_controller(self) -> str | None:
+        """The batch mode set by :meth:`enable_batch`, or None."""
+        return self._batch_mode
+
+    def enable_batch(self, mode: str) -> type[KinematicController]:
+        """Put every managed agent (and every agent spawned later) on one base controller.
+
+        Built-in omni / differential controllers are always vectorised by the simulation's
+        kinematic engine, so ``"batch_omni"`` / ``"batch_differential"`` install
+        OmniController / DifferentialController with each agent's current controller params. A
+        dotted path names a KinematicController subclass to install the same way. Agents
+        already on that class, fixed-base agents and agents whose movement was disabled
+        (``set_controller(None)``) are left alone; switched agents stop.
+
+        Returns:
+            The controller class installed.
+
+        Raises:
+            ValueError: naming ``mode`` and the accepted names, for anything else.
+        """
+        cls = batch_controller_class(mode)
+        self._batch_mode, self._batch_class = mode, cls
+        for agent in list(self.objects):
+            self._apply_batch(agent)
+        return cls
+
+    def disable_batch(self) -> None:
+        """Forget the batch mode; agents keep the controller they have."""
+        self._batch_mode = self._batch_class = None
+
+    def _apply_batch(self, agent: Agent) -> None:
+        cls = self._batch_class
+        if cls is None or agent.use_fixed_base or agent.controller is None:
+            return
+        if type(agent.controller) is not cls:
+            agent.set_controller(cls(params=agent.controller_params))
+
+
+def _frequency(value: Any, what: str) -> float:
+    real = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not (real and math.isfinite(value) and value > 0):
+        raise ValueError(f"{what}: expected a number > 0 (Hz), got {value!r}")
+    return float(value)
+
+
+def _fleet_controller(value: Any) -> dict[str, Any] | None:
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise ValueError(f"AgentManager.fleet_controller: expected a mapping, got {value!r}")
+    unknown = sorted(set(value) - set(ControllerParams.field_names()))
+    if unknown:
+        raise ValueError(
+            f"AgentManager.fleet_controller: unknown key(s) {unknown}; "
+            f"valid: {list(ControllerParams.field_names())}"
+        )
+    ControllerParams(**value)  # validates the values, naming the field
+    return dict(value)
