@@ -72,44 +72,55 @@ def candidate_pairs(
     if n < 2 or not moved.any():
         return np.empty((0, 2), dtype=np.int64)
     lo = np.floor(aabb_min / cell_size).astype(np.int64)
-    hi = np.floor(aabb_max / cell_size).astype(np.int64)
-    span = hi - lo + 1
-    # A pair with a NORMAL_2D side ignores Z, so those pairs are found in a second hash with
-    # Z collapsed; pairs of two 3D objects come from the full 3D hash.
-    span_xy = span.copy()
-    span_xy[:, 2] = 1
-    big = np.where(flat[:, None], span_xy, span).max(axis=1) > multi_cell_threshold + 1
-    small = ~big
-    pairs = [_hashed_pairs(lo, span, np.flatnonzero(small & ~flat))]
-    if flat.any():
+    span = np.floor(aabb_max / cell_size).astype(np.int64) - lo + 1
+    any_flat = bool(flat.any())
+    if any_flat:
+        # A pair with a NORMAL_2D side ignores Z, so those pairs come from a second hash with
+        # Z collapsed; pairs of two 3D objects come from the full 3D hash.
+        span_xy = span.copy()
+        span_xy[:, 2] = 1
+        big = np.where(flat[:, None], span_xy, span).max(axis=1) > multi_cell_threshold + 1
+    else:
+        big = span.max(axis=1) > multi_cell_threshold + 1
+    any_big = bool(big.any())
+    hashed = ~big & ~flat if any_big or any_flat else None
+    pairs = [_hashed_pairs(lo, span, hashed, moved)]
+    if any_flat:
         lo_xy = lo.copy()
         lo_xy[:, 2] = 0
-        xy = _hashed_pairs(lo_xy, span_xy, np.flatnonzero(small))
+        xy = _hashed_pairs(lo_xy, span_xy, ~big, moved)
         pairs.append(xy[flat[xy[:, 0]] | flat[xy[:, 1]]])
-    big_idx = np.flatnonzero(big)
-    if len(big_idx):
-        others = np.arange(n)
+    if any_big:
+        big_idx = np.flatnonzero(big)
         a = np.repeat(big_idx, n)
-        b = np.tile(others, len(big_idx))
-        keep = a != b
+        b = np.tile(np.arange(n), len(big_idx))
+        keep = (a != b) & (moved[a] | moved[b])
         pairs.append(np.stack([a[keep], b[keep]], axis=1))
-    out = np.concatenate(pairs)
+    out = np.concatenate(pairs) if len(pairs) > 1 else pairs[0]
     if len(out) == 0:
         return out
-    out.sort(axis=1)
-    out = out[moved[out[:, 0]] | moved[out[:, 1]]]
-    if len(out) == 0:
-        return out
-    return np.unique(out, axis=0)
+    first = np.minimum(out[:, 0], out[:, 1])
+    second = np.maximum(out[:, 0], out[:, 1])
+    code = np.unique(first * n + second)
+    return np.stack([code // n, code % n], axis=1)
 
 
-def _hashed_pairs(lo: np.ndarray, span: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Pairs among ``idx`` that share at least one cell."""
+def _hashed_pairs(
+    lo: np.ndarray, span: np.ndarray, members: np.ndarray | None, moved: np.ndarray
+) -> np.ndarray:
+    """Pairs among ``members`` (a mask; None = all) sharing a cell, each with a moved object.
+
+    Every object is entered once per cell it overlaps; entries are sorted by cell key, and
+    each moved object's entries look up the run of equal keys with ``searchsorted``. Pairs
+    come out unordered and possibly repeated (the caller dedupes).
+    """
+    idx = np.arange(len(lo)) if members is None else np.flatnonzero(members)
+    empty = np.empty((0, 2), dtype=np.int64)
     if len(idx) < 2:
-        return np.empty((0, 2), dtype=np.int64)
+        return empty
     s = span[idx]
-    counts = s.prod(axis=1)
-    if (counts == 1).all():  # common case: every object inside one cell
+    counts = s[:, 0] * s[:, 1] * s[:, 2]
+    if counts.max() == 1:  # common case: every object inside one cell
         owner, cells = idx, lo[idx]
     else:
         owner = np.repeat(idx, counts)
@@ -117,21 +128,23 @@ def _hashed_pairs(lo: np.ndarray, span: np.ndarray, idx: np.ndarray) -> np.ndarr
         starts = np.repeat(np.cumsum(counts) - counts, counts)
         k = np.arange(len(owner)) - starts
         sx, sy = np.repeat(s[:, 0], counts), np.repeat(s[:, 1], counts)
-        dx = k % sx
-        dy = (k // sx) % sy
-        dz = k // (sx * sy)
-        cells = lo[owner] + np.stack([dx, dy, dz], axis=1)
+        cells = lo[owner] + np.stack([k % sx, (k // sx) % sy, k // (sx * sy)], axis=1)
     keys = _keys(cells)
-    order = np.argsort(keys, kind="stable")
+    order = np.argsort(keys)
     keys, owner = keys[order], owner[order]
-    found = []
-    gap = 1
-    while gap < len(keys):
-        same = keys[gap:] == keys[:-gap]
-        if not same.any():
-            break  # sorted keys: no run is longer than `gap`
-        found.append(np.stack([owner[:-gap][same], owner[gap:][same]], axis=1))
-        gap += 1
-    if not found:
-        return np.empty((0, 2), dtype=np.int64)
-    return np.concatenate(found)
+    mine = moved[owner]
+    if not mine.any():
+        return empty
+    probe = keys[mine]
+    left = np.searchsorted(keys, probe, "left")
+    run = np.searchsorted(keys, probe, "right") - left
+    shared = run > 1
+    if not shared.any():
+        return empty
+    probe_owner, left, run = owner[mine][shared], left[shared], run[shared]
+    which = np.repeat(np.arange(len(run)), run)
+    offset = np.arange(len(which)) - np.repeat(np.cumsum(run) - run, run)
+    a = probe_owner[which]
+    b = owner[left[which] + offset]
+    keep = a != b
+    return np.stack([a[keep], b[keep]], axis=1)

@@ -456,35 +456,51 @@ class KinematicEngine:
 
     def _advance_pose(self, s: np.ndarray, dt: float) -> None:
         store = self._store
-        u, du = self.u[s], self.du[s]
-        vmax, amax = self.u_vmax[s], self.u_amax[s]
+        u = self.u[s]
+        amax = self.u_amax[s]
         remaining = 1.0 - u
         # `carry`: share of this step's acceleration budget already spent by the previous
         # segment's last step (its velocity must fall to zero and the new one rise from it).
-        budget = amax * dt * (1.0 - self.carry[s])
-        rate = np.minimum(np.minimum(du + budget, vmax), _braking_rate(remaining, amax, dt))
+        carry = self.carry[s]
+        rate = np.minimum(self.du[s] + amax * dt * (1.0 - carry), self.u_vmax[s])
+        rate = np.minimum(rate, _braking_rate(remaining, amax, dt))
         step = rate * dt
         arrived = step >= remaining - 1e-12
-        u_new = np.where(arrived, 1.0, u + step)
+        any_arrived = bool(arrived.any())
+        u_new = np.where(arrived, 1.0, u + step) if any_arrived else u + step
         self.u[s] = u_new
-        self.du[s] = np.where(arrived, 0.0, rate)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.carry[s] = np.where(arrived, np.nan_to_num(rate / (amax * dt)), 0.0)
+        self.du[s] = np.where(arrived, 0.0, rate) if any_arrived else rate
+        if any_arrived:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                self.carry[s] = np.where(arrived, np.nan_to_num(rate / (amax * dt)), 0.0)
+        elif carry.any():
+            self.carry[s] = 0.0
         rows = self.row[s]
         old_pos = store.position[rows]
-        p0, p1 = self.p0[s], self.p1[s]
-        pos = p0 + (p1 - p0) * u_new[:, None]
-        pos[arrived] = p1[arrived]
-        quat = quat_slerp_batch(
-            self.q0[s], self.q1[s], u_new, self.sl_dot[s], self.sl_theta[s], self.sl_sin[s]
-        )
-        quat[arrived] = self.q_goal[s][arrived]
+        p0 = self.p0[s]
+        pos = p0 + (self.p1[s] - p0) * u_new[:, None]
+        if any_arrived:
+            pos[arrived] = self.p1[s[arrived]]
         store.velocity[rows] = (pos - old_pos) / dt
-        store.angular_velocity[rows] = self.axis[s] * ((u_new - u) * self.theta[s] / dt)[:, None]
         store.position[rows] = pos
-        store.orientation[rows] = quat
+        # Orientation work only for segments that rotate (pure translations keep theirs).
+        turning = self.theta[s] > 0.0
+        if turning.any():
+            t, r, un = s[turning], rows[turning], u_new[turning]
+            quat = quat_slerp_batch(
+                self.q0[t], self.q1[t], un, self.sl_dot[t], self.sl_theta[t], self.sl_sin[t]
+            )
+            done = arrived[turning]
+            if done.any():
+                quat[done] = self.q_goal[t[done]]
+            store.orientation[r] = quat
+            store.angular_velocity[r] = (
+                self.axis[t] * ((un - u[turning]) * self.theta[t] / dt)[:, None]
+            )
+        if not turning.all():
+            store.angular_velocity[rows[~turning]] = 0.0
         store.mark_moved(rows)
-        if arrived.any():
+        if any_arrived:
             for slot in s[arrived].tolist():
                 if self.mode[slot] == _POSE and self._plans[slot] is not None:
                     self._plan_next(slot)

@@ -461,7 +461,7 @@ def _selects_base(entry: Any) -> bool | None:
     return issubclass(cls, KinematicController) if isinstance(cls, type) else None
 
 
-def with_fleet_controller(spec: Any, fleet: dict[str, Any] | None) -> Any:
+def _with_fleet_controller(spec: Any, fleet: dict[str, Any] | None) -> Any:
     """Merge fleet-wide ControllerParams fields under an agent's own ``controller`` spec.
 
     The fleet values go into the spec's base controller entry, the agent's own values winning;
@@ -495,7 +495,7 @@ _BATCH_MODES: dict[str, type[KinematicController]] = {
 }
 
 
-def batch_controller_class(mode: str) -> type[KinematicController]:
+def _batch_controller_class(mode: str) -> type[KinematicController]:
     """The base controller class for a batch mode name or a dotted class path.
 
     Raises:
@@ -548,8 +548,6 @@ class AgentManager(SimObjectManager[Agent]):
     ) -> None:
         if name is not None and not isinstance(name, str):
             raise ValueError(f"AgentManager.name: expected a string or None, got {name!r}")
-        if sim_core is not None and name is not None and sim_core.get_manager(name) is not None:
-            raise ValueError(f"AgentManager.name: a manager named {name!r} is already registered")
         self.name = name
         self.update_frequency = _frequency(update_frequency, "AgentManager.update_frequency")
         self.fleet_controller = _fleet_controller(fleet_controller)
@@ -564,6 +562,11 @@ class AgentManager(SimObjectManager[Agent]):
         return f"AgentManager(name={self.name!r}, objects={len(self.objects)})"
 
     def _attach(self, sim: MultiRobotSimulationCore) -> None:
+        other = None if self.name is None else sim.get_manager(self.name)
+        if other is not None and other is not self:
+            raise ValueError(
+                f"AgentManager.name: a manager named {self.name!r} is already registered"
+            )
         super()._attach(sim)
         for wrapper, frequency in self._pending_callbacks:
             sim.register_callback(wrapper, frequency)
@@ -603,7 +606,7 @@ class AgentManager(SimObjectManager[Agent]):
     def _prepare_params(self, params: SimObjectSpawnParams) -> SimObjectSpawnParams:
         if not self.fleet_controller or not isinstance(params, AgentSpawnParams):
             return params
-        merged = with_fleet_controller(params.controller, self.fleet_controller)
+        merged = _with_fleet_controller(params.controller, self.fleet_controller)
         return (
             params
             if merged is params.controller
@@ -615,7 +618,7 @@ class AgentManager(SimObjectManager[Agent]):
             return config
         return {
             **config,
-            "controller": with_fleet_controller(config.get("controller"), self.fleet_controller),
+            "controller": _with_fleet_controller(config.get("controller"), self.fleet_controller),
         }
 
     # ----- goals and motion ---------------------------------------------------------------
@@ -759,7 +762,7 @@ class AgentManager(SimObjectManager[Agent]):
         Raises:
             ValueError: naming ``mode`` and the accepted names, for anything else.
         """
-        cls = batch_controller_class(mode)
+        cls = _batch_controller_class(mode)
         self._batch_mode, self._batch_class = mode, cls
         for agent in list(self.objects):
             self._apply_batch(agent)
