@@ -1,5 +1,9 @@
 """Fleet-scale benchmark: step time, real-time factor, spawn time and memory per agent.
 
+Memory is reported two ways: the Python heap that spawning adds (tracemalloc, measured in a
+separate spawn so tracing does not slow the timed run) and the process RSS growth during the
+timed spawn (which includes PyBullet's own per-body memory).
+
 Workload (the same for every N): N box robots (0.1 m cube, kinematic) on a ceil(sqrt(N)) grid
 with 1 m spacing at z = 0.1; half of them, chosen with a fixed seed, get one goal uniform in
 (-10, g + 10) on x and y (g = grid side in m); omni controller with max_linear_vel 2.0 and
@@ -53,9 +57,17 @@ def spawn_fleet(sim: MultiRobotSimulationCore, n: int) -> list[Agent]:
     return Agent.spawn_batch(params, sim)
 
 
-def run(n: int, profile: bool = False) -> dict[str, float]:
-    """Run the workload for N agents; return the figures."""
-    params = SimulationParams(
+def _rss_bytes() -> int:
+    """Resident set size of this process (Linux /proc; 0 elsewhere)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * 4096
+    except OSError:
+        return 0
+
+
+def _params() -> SimulationParams:
+    return SimulationParams(
         gui=False,
         monitor=False,
         target_rtf=0.0,
@@ -65,14 +77,30 @@ def run(n: int, profile: bool = False) -> dict[str, float]:
         collision_check_frequency=None,
         enable_floor=False,
     )
+
+
+def python_heap_per_agent(n: int) -> float:
+    """KB of Python heap (tracemalloc) that spawning N agents adds, per agent."""
     gc.collect()
-    tracemalloc.start()
-    with MultiRobotSimulationCore(params) as sim:
+    with MultiRobotSimulationCore(_params()) as sim:
+        tracemalloc.start()
+        base = tracemalloc.get_traced_memory()[0]
+        agents = spawn_fleet(sim, n)
+        used = tracemalloc.get_traced_memory()[0] - base
+        tracemalloc.stop()
+        del agents
+    return used / 1024.0 / n
+
+
+def run(n: int, profile: bool = False) -> dict[str, float]:
+    """Run the workload for N agents; return the figures."""
+    gc.collect()
+    with MultiRobotSimulationCore(_params()) as sim:
+        rss0 = _rss_bytes()
         t0 = time.perf_counter()
         agents = spawn_fleet(sim, n)
         spawn_s = time.perf_counter() - t0
-        mem_bytes = tracemalloc.get_traced_memory()[0]
-        tracemalloc.stop()
+        rss_bytes = _rss_bytes() - rss0
         rng = np.random.default_rng(42)
         side = math.ceil(math.sqrt(n))
         movers = rng.choice(n, size=n // 2, replace=False)
@@ -95,7 +123,8 @@ def run(n: int, profile: bool = False) -> dict[str, float]:
         "step_ms": step_ms,
         "real_time_factor": TIMESTEP * 1000.0 / step_ms,
         "spawn_s": spawn_s,
-        "memory_kb_per_agent": mem_bytes / 1024.0 / n,
+        "python_heap_kb_per_agent": python_heap_per_agent(n),
+        "rss_kb_per_agent": rss_bytes / 1024.0 / n,
         "moving_after": moving,
         "collisions": collisions,
     }
@@ -120,9 +149,10 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(result))
         else:
             print(
-                f"N={n:>6}: step {result['step_ms']:8.3f} ms  RTF {result['real_time_factor']:8.1f}x  "
-                f"spawn {result['spawn_s']:6.3f} s  memory {result['memory_kb_per_agent']:5.2f} KB/agent  "
-                f"collisions {result['collisions']}"
+                f"N={n:>6}: step {result['step_ms']:8.3f} ms  "
+                f"RTF {result['real_time_factor']:8.1f}x  spawn {result['spawn_s']:6.3f} s  "
+                f"heap {result['python_heap_kb_per_agent']:5.2f} KB/agent  "
+                f"RSS {result['rss_kb_per_agent']:5.2f} KB/agent  collisions {result['collisions']}"
             )
             if args.profile:
                 for key, value in sorted(result["phases_ms"].items(), key=lambda kv: -kv[1]):  # type: ignore[union-attr]

@@ -14,6 +14,7 @@ from fleet_async.core.action import (
     WaitAction,
 )
 from fleet_async.core.agent import Agent
+from fleet_async.core.agent_manager import AgentManager
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin
 from fleet_async.core.config_utils import (
@@ -45,7 +46,7 @@ from fleet_async.core.logging_utils import (
     get_named_lazy_logger,
     wrap_existing_logger,
 )
-from fleet_async.core.managers import AgentManager, SimObjectManager, register_entity_class
+from fleet_async.core.managers import SimObjectManager, register_entity_class
 from fleet_async.core.models import (
     add_model_search_path,
     list_model_search_paths,
