@@ -225,16 +225,13 @@ class KinematicEngine:
 
     def set_limits(self, slot: int, limits: MotionLimits) -> None:
         """Replace a slot's kinematic limits (applies from the next segment)."""
-        for name, value, flag in (
-            ("vmax", limits.max_linear_vel, "lin_scalar"),
-            ("amax", limits.max_linear_accel, None),
-            ("wmax", limits.max_angular_vel, "ang_scalar"),
-            ("alpha", limits.max_angular_accel, None),
-        ):
-            arr = np.broadcast_to(np.asarray(value, dtype=float), (3,))
-            getattr(self, name)[slot] = arr
-            if flag is not None:
-                getattr(self, flag)[slot] = np.ndim(value) == 0
+        # Called once per spawned agent: plain assignments, no temporary arrays.
+        self.vmax[slot] = limits.max_linear_vel
+        self.amax[slot] = limits.max_linear_accel
+        self.wmax[slot] = limits.max_angular_vel
+        self.alpha[slot] = limits.max_angular_accel
+        self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
+        self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
 
     # ----- queries ------------------------------------------------------------------------
 

@@ -7,8 +7,9 @@ fleet-wide controller settings for agents. A manager with a simulation registers
 (``sim.register_manager``), so ``sim.remove_object`` and ``sim.reset`` keep its lists in sync.
 
 Randomised grid spawning draws from the simulation's generator (``sim.rng``), so a run is
-reproduced by its seed. A spawn call that fails part-way keeps what it already spawned
-(registered in the simulation and in the manager) and re-raises the error.
+reproduced by its seed. Grid and batch spawns of the standard classes go through the bulk path
+(``spawn_batch``), which leaves nothing behind when it fails; a class that overrides
+``from_params`` spawns one object at a time, and a failure keeps what was already spawned.
 """
 
 from __future__ import annotations
@@ -291,7 +292,7 @@ class SimObjectManager(Generic[T]):
             self._prepare_params(_check_params(prm, f"spawn_objects_batch[{i}]"))
             for i, prm in enumerate(params_list)
         ]
-        return self._spawn_each((self._maker(prm) for prm in prepared), "spawn_objects_batch")
+        return self._spawn_params(prepared, "spawn_objects_batch")
 
     def spawn_from_config(
         self, entities_yaml: Sequence[dict[str, Any]], *, source: str | None = None
@@ -363,16 +364,37 @@ class SimObjectManager(Generic[T]):
         """Spawn ``params[kinds[k]]`` at cell ``cells[k]``, keeping each type's orientation."""
         positions = grid.cell_positions()
         prepared = [self._prepare_params(prm) for prm in params]
-        makers = (
-            self._maker(
-                dataclasses.replace(
-                    prepared[kind],
-                    initial_pose=Pose(positions[cell], prepared[kind].initial_pose.orientation),
-                )
+        placed = [
+            dataclasses.replace(
+                prepared[kind],
+                initial_pose=Pose(positions[cell], prepared[kind].initial_pose.orientation),
             )
             for cell, kind in zip(cells.tolist(), kinds.tolist(), strict=True)
+        ]
+        return self._spawn_params(placed, what)
+
+    def _spawn_params(self, params_list: list[SimObjectSpawnParams], what: str) -> list[T]:
+        """Spawn from params: in bulk when the class spawns the standard way, else one by one.
+
+        The bulk path (``object_class.spawn_batch``) is all-or-nothing: on an error nothing it
+        created is left behind. A class that overrides ``from_params`` is honoured by spawning
+        one by one, where what was spawned before an error stays tracked.
+        """
+        cls = self.object_class
+        standard = getattr(cls.from_params, "__func__", None) in (
+            SimObject.from_params.__func__,  # type: ignore[attr-defined]
+            Agent.from_params.__func__,  # type: ignore[attr-defined]
         )
-        return self._spawn_each(makers, what)
+        if self.sim_core is None or not standard:
+            return self._spawn_each((self._maker(prm) for prm in params_list), what)
+        start = time.perf_counter()
+        spawned = cast(list[T], cls.spawn_batch(params_list, self.sim_core))
+        for obj in spawned:
+            self.add_object(obj)
+        if self.enable_profiling:
+            elapsed_ms = (time.perf_counter() - start) * 1e3
+            logger.info("%s: spawned %d objects in %.1f ms", what, len(spawned), elapsed_ms)
+        return spawned
 
     def _spawn_entities(self, entries: Any, key: str, source: str | None) -> list[T]:
         where = f"{source}: " if source else ""

@@ -83,16 +83,24 @@ class KinematicState:
         collision_code: int = 0,
     ) -> int:
         """Claim a row for one object and fill it; return the row index."""
-        return int(
-            self.allocate_many(
-                np.array([object_id]),
-                np.array([body_id]),
-                np.asarray(position, dtype=float).reshape(1, 3),
-                np.asarray(orientation, dtype=float).reshape(1, 4),
-                kinematic=kinematic,
-                collision_code=collision_code,
-            )[0]
-        )
+        if self._free:
+            row = heapq.heappop(self._free)
+        else:
+            row = self._high_water
+            self._reserve(row + 1)
+            self._high_water += 1
+        self.position[row] = position
+        self.orientation[row] = orientation
+        self.velocity[row] = 0.0
+        self.angular_velocity[row] = 0.0
+        self.body_id[row] = body_id
+        self.object_id[row] = object_id
+        self.collision_mode[row] = collision_code
+        self.kinematic[row] = kinematic
+        self.active[row] = True
+        self.dirty[row] = False
+        self.moved[row] = True
+        return row
 
     def allocate_many(
         self,

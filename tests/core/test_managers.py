@@ -7,6 +7,7 @@ import math
 from contextlib import contextmanager
 
 import numpy as np
+import pybullet as p
 import pytest
 from conftest import headless_params
 
@@ -316,13 +317,16 @@ def test_spawn_objects_batch_runs_inside_batch_spawn(sim, monkeypatch):
     assert positions(objs) == [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
 
 
-def test_a_failing_spawn_keeps_what_it_spawned_registered_and_raises(sim):
+def test_a_failing_bulk_spawn_leaves_nothing_behind(sim):
     manager = AgentManager(sim)
+    keep = manager.spawn_objects_batch([agent_params("before")])
+    bodies = p.getNumBodies(physicsClientId=sim.client)
     missing = AgentSpawnParams(visual_shape=ShapeParams("mesh", mesh_path="/no/such/mesh.obj"))
     with pytest.raises(FileNotFoundError, match=r"mesh\.obj"):
         manager.spawn_objects_batch([agent_params("ok"), missing, agent_params("never")])
-    assert [a.name for a in manager.objects] == ["ok"] and consistent(manager)
-    assert sim.agents == manager.objects
+    assert manager.objects == keep and consistent(manager)
+    assert sim.agents == keep
+    assert p.getNumBodies(physicsClientId=sim.client) == bodies
 
 
 def test_spawn_from_config_dispatches_on_type(sim):
