@@ -8,7 +8,26 @@ here; submodules live in ``fleet_async.core`` (the synchronous simulator) and
 
 from fleet_async.core import *  # noqa: F403  # re-export the core's public API
 from fleet_async.core import __all__ as _core_all
+from fleet_async.tasks import (
+    ActionCancelledError,
+    ActionFailedError,
+    MissionDeadlockError,
+    MissionError,
+    MissionStalledError,
+    run,
+    run_async,
+)
 
 __version__ = "0.1.0"
 
-__all__ = [*_core_all, "__version__"]
+__all__ = [
+    *_core_all,
+    "ActionCancelledError",
+    "ActionFailedError",
+    "MissionDeadlockError",
+    "MissionError",
+    "MissionStalledError",
+    "__version__",
+    "run",
+    "run_async",
+]

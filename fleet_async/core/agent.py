@@ -18,6 +18,7 @@ import numpy as np
 import pybullet as p
 
 from fleet_async.core.action import Action
+from fleet_async.core.agent_missions import AgentMissionApi
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin, create_agent_plugin
 from fleet_async.core.bulk import create_bodies, wrap_all
@@ -84,7 +85,7 @@ def _mesh_kwargs(spawn_params: AgentSpawnParams) -> dict[str, Any]:
     }
 
 
-class Agent(SimObject):
+class Agent(AgentMissionApi, SimObject):
     """A robot: mobile (omni / differential) or fixed-base, mesh, URDF or virtual.
 
     Args:

@@ -30,8 +30,9 @@ from fleet_async.core.attachments import AttachmentSet
 from fleet_async.core.backend import PyBulletBackend
 from fleet_async.core.collision import CollisionSystem
 from fleet_async.core.config_utils import load_yaml_config
-from fleet_async.core.events import EventBus, SimEvents
+from fleet_async.core.events import SimEvents
 from fleet_async.core.fleet import FleetMotion
+from fleet_async.core.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.monitor import DataMonitor, SimulationMonitor
 from fleet_async.core.params import SimulationParams
 from fleet_async.core.plugins import SimPlugin
@@ -57,7 +58,7 @@ class MotionSystem(Protocol):
         """Move every object this system owns by one step of ``dt`` seconds."""
 
 
-class MultiRobotSimulationCore:
+class MultiRobotSimulationCore(SimMissionApi):
     """A multi-robot simulation on one PyBullet client.
 
     Args:
@@ -78,7 +79,7 @@ class MultiRobotSimulationCore:
         self.collision_color = (
             list(collision_color) if collision_color is not None else [1.0, 0.0, 0.0, 1.0]
         )
-        self.events = EventBus()
+        self.events: SimEventBus = SimEventBus(self)
         self.rng = np.random.default_rng(self._params.seed)
         self._backend = PyBulletBackend(self._params)
         self._backend.connect()

@@ -1,8 +1,28 @@
 """Async missions on anyio: coroutines that drive the fleet in sim time.
 
-This layer sits on top of ``fleet_async.core`` and compiles missions into the core's action
-queues; the core never imports it. (Work in progress: the mission runtime lands with the
-async-missions issue.)
+``fleet_async.run(sim, main)`` runs ``main`` as a mission on asyncio or trio; missions await
+``sim.sleep``, ``agent.move``, ``agent.pick``, ``sim.events.wait`` and friends, which park them
+until the step loop gets there. The core never imports this package: it exposes the awaitables
+and this runtime serves them.
 """
 
-__all__: list[str] = []
+from fleet_async.tasks.errors import (
+    ActionCancelledError,
+    ActionFailedError,
+    MissionDeadlockError,
+    MissionError,
+    MissionStalledError,
+    NoMissionRuntimeError,
+)
+from fleet_async.tasks.run import run, run_async
+
+__all__ = [
+    "ActionCancelledError",
+    "ActionFailedError",
+    "MissionDeadlockError",
+    "MissionError",
+    "MissionStalledError",
+    "NoMissionRuntimeError",
+    "run",
+    "run_async",
+]
