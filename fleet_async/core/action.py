@@ -208,7 +208,8 @@ class WaitAction(Action):
 
     def execute(self, agent: Agent, dt: float) -> bool:
         """Start the timer on the first call; complete once it has run out."""
-        now = agent.sim_core.sim_time if agent.sim_core is not None else 0.0
+        sim = agent.sim_core
+        now = sim.fleet.actions.now if sim is not None else 0.0
         if self._until is None:
             self._until = now + self.duration
             if self.action_type == "charge":

@@ -39,6 +39,8 @@ class ActionQueue:
         self._on_motion: set[int] = set()  # agents whose action waits for motion to end
         self._timers: list[tuple[float, int, int, Action]] = []
         self._seq = 0
+        self.now = 0.0
+        """Sim time the queue is acting at: the step's start in the tick, its end after motion."""
 
     # ----- queries ------------------------------------------------------------------------
 
@@ -114,10 +116,8 @@ class ActionQueue:
 
     def tick(self, now: float, dt: float) -> None:
         """Advance the agents that are due at sim time ``now`` (before motion)."""
-        while self._timers and self._timers[0][0] <= now + _EPS:
-            _, _, key, action = heapq.heappop(self._timers)
-            if self._current.get(key) is action:
-                self._due.add(key)
+        self.now = now
+        self._expire_timers(now)
         if not self._due:
             return
         due, self._due = sorted(self._due), set()
@@ -125,6 +125,36 @@ class ActionQueue:
             agent = self._agents.get(key)
             if agent is not None:
                 self._advance(agent, now, dt)
+
+    def expire(self, end: float, dt: float) -> None:
+        """After motion: finish timed actions that are due by the step's end time ``end``.
+
+        A WaitAction that ends at the instant this step reaches completes now, with that end
+        time, so whoever waits on it resumes at the right instant; the next queued action then
+        starts in the following step's tick, at the same sim time.
+        """
+        if not self._timers or self._timers[0][0] > end + _EPS:
+            return
+        self.now = end
+        for key in sorted(self._expire_timers(end)):
+            agent = self._agents.get(key)
+            action = self._current.get(key)
+            if agent is None or action is None:
+                continue
+            if self._execute(agent, action, dt):
+                self._complete(agent, action, end)  # stays due: the next action starts next tick
+            else:
+                self._due.discard(key)
+                self._park(agent, action)
+
+    def _expire_timers(self, now: float) -> set[int]:
+        expired: set[int] = set()
+        while self._timers and self._timers[0][0] <= now + _EPS:
+            _, _, key, action = heapq.heappop(self._timers)
+            if self._current.get(key) is action:
+                self._due.add(key)
+                expired.add(key)
+        return expired
 
     def on_motion_end(self, agent: Agent, now: float, dt: float) -> None:
         """The engine stopped ``agent`` (during motion; ``now`` is the end of the step)."""

@@ -6,7 +6,8 @@ One ``FleetMotion`` belongs to each simulation (``sim.fleet``) and runs as a mot
 2. per-agent controllers (patrol, random walk, user controllers) for agents that have them;
 3. the kinematic engine advances every agent on a built-in controller in one numpy pass, and
    wakes the actions of agents that stopped;
-4. per-agent plugins (battery) for agents that have them.
+4. per-agent plugins (battery) for agents that have them;
+5. timed actions (waits) that end with this step complete, at the step's end time.
 
 Agents without high-level controllers or plugins cost nothing in steps 2 and 4.
 """
@@ -83,6 +84,8 @@ class FleetMotion:
         self.engine.advance(dt)
         for agent in tuple(self._plugged.values()):
             agent.step_plugins(dt)
+        # Last: a wait that ends with this step has covered all of it (a charge charged).
+        self.actions.expire(self._sim.sim_time + dt, dt)
 
     def motion_ended(self, agent: Agent, reached: bool) -> None:
         """Record that ``agent`` stopped and wake an action waiting for it.

@@ -351,6 +351,7 @@ class Runtime:
             return
         waiter = Waiter(mission, "condition")
         key = id(waiter)
+
         def undo() -> None:
             self._conditions.pop(key, None)
 
@@ -368,6 +369,7 @@ class Runtime:
             handler = self._event_handler(name)
             self._event_handlers[name] = handler
             self.sim.events.on(name, handler, priority=1_000_000)
+
         def undo() -> None:
             table.pop(key, None)
 

@@ -202,8 +202,9 @@ def test_charge_wait_action_charges_for_exactly_its_duration(sim):
     for _ in range(30):
         sim.step_once()
         charging.append(agent.is_charging)
-    # Charging in the 20 steps that start at 0.0 .. 1.9 s, never after.
-    assert charging == [True] * 20 + [False] * 10
+    # Charging through the 20 steps covering 0.0 .. 2.0 s; at 2.0 s (after the 20th step)
+    # the wait is over, so the state seen after each step is on 19 times, then off.
+    assert charging == [True] * 19 + [False] * 11
     assert wait.status is ActionStatus.COMPLETED
     assert wait.start_time == 0.0 and wait.end_time == pytest.approx(2.0, abs=TOL)
     assert agent.battery_soc - 0.5 == pytest.approx(2.0 * 0.02, abs=TOL)
