@@ -87,7 +87,7 @@ def pytest_pyfunc_call(pyfuncitem: pytest.Function) -> bool | None:
         return None
     names = inspect.signature(test).parameters
     kwargs = {name: pyfuncitem.funcargs[name] for name in names if name in pyfuncitem.funcargs}
-    backend = pyfuncitem.funcargs.get("fleet_backend", "asyncio")
-    until = float(pyfuncitem.funcargs.get("fleet_sim_until", 600.0))
+    backend = str(pyfuncitem.funcargs.get("fleet_backend", "asyncio"))
+    until = float(str(pyfuncitem.funcargs.get("fleet_sim_until", 600.0)))
     run_mission_test(test, kwargs, backend, until)
     return True
