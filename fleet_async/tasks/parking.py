@@ -36,6 +36,12 @@ class Parker:
 
     one_at_a_time = False
     """Whether wakes must be delivered one task at a time to keep the order deterministic."""
+    needs_recheck = True
+    """Whether a zero runnable count must be confirmed after yielding to the loop."""
+
+    def current_task(self) -> Any:
+        """The running task object (a cheap identity for mission lookup)."""
+        raise NotImplementedError
 
     def prepare(self, waiter: Waiter) -> None:
         """Create the backend handle for ``waiter`` (in the waiting task)."""
@@ -52,6 +58,9 @@ class Parker:
 
 class AsyncioParker(Parker):
     """asyncio: a Future per park. The ready queue is FIFO, so waking in key order suffices."""
+
+    def current_task(self) -> Any:
+        return asyncio.current_task()
 
     def prepare(self, waiter: Waiter) -> None:
         waiter.handle = asyncio.get_running_loop().create_future()
@@ -78,11 +87,17 @@ class TrioParker(Parker):
     wakes are delivered one task at a time in key order."""
 
     one_at_a_time = True
+    # trio calls the abort function synchronously when a scope is cancelled, so the counter
+    # is exact the moment it reaches zero.
+    needs_recheck = False
 
     def __init__(self) -> None:
         import trio  # only when running on trio
 
         self._trio = trio
+
+    def current_task(self) -> Any:
+        return self._trio.lowlevel.current_task()
 
     def prepare(self, waiter: Waiter) -> None:
         waiter.handle = self._trio.lowlevel.current_task()

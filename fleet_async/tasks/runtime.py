@@ -82,7 +82,7 @@ class Runtime:
         self.watchdog = watchdog
         self.runnable = 0
         self.alive = 0
-        self._missions: dict[Any, Mission] = {}  # anyio task id -> mission
+        self._missions: dict[Any, Mission] = {}  # backend task object -> mission
         self._seq = itertools.count()
         self._timers: list[tuple[int, tuple[int, ...], int, Waiter]] = []
         self._wakes: list[tuple[tuple[int, ...], int, Waiter, Any, BaseException | None]] = []
@@ -113,10 +113,10 @@ class Runtime:
             NoMissionRuntimeError: outside a mission started by fleet_async.
         """
         try:
-            task_id = anyio.get_current_task().id
-        except Exception:  # no running event loop
-            task_id = None
-        mission = self._missions.get(task_id)
+            task = self.parker.current_task()
+        except RuntimeError:  # no running event loop
+            task = None
+        mission = self._missions.get(task)
         if mission is None:
             raise NoMissionRuntimeError(
                 f"{what} must be awaited inside a mission started by fleet_async "
@@ -148,7 +148,7 @@ class Runtime:
         on_done: Callable[[], None] | None,
         box: list[Any] | None,
     ) -> None:
-        task_id = anyio.get_current_task().id
+        task_id = self.parker.current_task()
         self._missions[task_id] = Mission(key, name)
         try:
             result = await fn(*args)
@@ -227,6 +227,10 @@ class Runtime:
         with anyio.move_on_after(self.watchdog) as scope:
             while True:
                 if self.runnable == 0:
+                    if not self.parker.needs_recheck:
+                        return
+                    # asyncio resumes a cancelled task (which then counts itself runnable)
+                    # one loop iteration after the cancel: look again after it had its turn.
                     await anyio.lowlevel.cancel_shielded_checkpoint()
                     await anyio.lowlevel.cancel_shielded_checkpoint()
                     if self.runnable == 0:

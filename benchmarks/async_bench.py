@@ -1,0 +1,144 @@
+"""Mission-layer benchmark: the cost of a sim-time await, and of missions over action queues.
+
+1. ``sleep``: T missions x W ``await sim.sleep(dt)`` calls in an empty simulation; reports wall
+   time per wait (the driver's step is nearly free, so this is the mission machinery).
+2. ``fleet``: N agents each looping move -> sleep -> move for S steps, once driven by missions
+   (``await agent.move``) and once by synchronous action queues refilled from a callback;
+   reports ms/step for both and the mission layer's overhead.
+
+Run:  python benchmarks/async_bench.py [--tasks 1000] [--waits 1000] [--agents 1000] [--steps 600]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import fleet_async as fa
+from fleet_async import (
+    Agent,
+    AgentSpawnParams,
+    MoveAction,
+    MultiRobotSimulationCore,
+    Pose,
+    ShapeParams,
+    SimulationParams,
+    WaitAction,
+)
+
+
+def _params() -> SimulationParams:
+    return SimulationParams(
+        gui=False,
+        monitor=False,
+        target_rtf=0.0,
+        timestep=0.1,
+        enable_floor=False,
+        collision_check_frequency=0,
+    )
+
+
+def sleep_bench(tasks: int, waits: int, backend: str) -> float:
+    """Microseconds of wall time per ``await sim.sleep``."""
+    with MultiRobotSimulationCore(_params()) as sim:
+
+        async def sleeper() -> None:
+            for _ in range(waits):
+                await sim.sleep(0.1)
+
+        async def main() -> None:
+            async with sim.task_group() as tg:
+                for _ in range(tasks):
+                    tg.start_soon(sleeper)
+
+        t0 = time.perf_counter()
+        fa.run(sim, main, backend=backend)
+        elapsed = time.perf_counter() - t0
+    return elapsed / (tasks * waits) * 1e6
+
+
+def _fleet(sim: MultiRobotSimulationCore, n: int) -> list[Agent]:
+    cube = ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
+    return Agent.spawn_batch(
+        [
+            AgentSpawnParams(
+                visual_shape=cube,
+                collision_shape=cube,
+                initial_pose=Pose.from_xyz(2.0 * i, 0.0, 0.1),
+                controller={"type": "omni", "max_linear_vel": 2.0},
+            )
+            for i in range(n)
+        ],
+        sim,
+    )
+
+
+def fleet_missions(n: int, steps: int, backend: str) -> float:
+    """ms/step with every agent driven by a mission."""
+    with MultiRobotSimulationCore(_params()) as sim:
+        agents = _fleet(sim, n)
+
+        async def shuttle(agent: Agent) -> None:
+            x = agent.get_pose().x
+            while True:
+                await agent.move(Pose.from_xyz(x, 1.0, 0.1))
+                await sim.sleep(0.5)
+                await agent.move(Pose.from_xyz(x, 0.0, 0.1))
+
+        async def main() -> None:
+            async with sim.task_group() as tg:
+                for agent in agents:
+                    tg.start_soon(shuttle, agent)
+
+        t0 = time.perf_counter()
+        fa.run(sim, main, backend=backend, until=steps * sim.params.timestep)
+        return (time.perf_counter() - t0) * 1e3 / steps
+
+
+def fleet_queues(n: int, steps: int) -> float:
+    """ms/step with the same work queued as actions, refilled when a queue runs dry."""
+    with MultiRobotSimulationCore(_params()) as sim:
+        agents = _fleet(sim, n)
+        homes = [a.get_pose().x for a in agents]
+
+        def refill(s: MultiRobotSimulationCore, dt: float) -> None:
+            for agent, x in zip(agents, homes, strict=True):
+                if agent.is_action_queue_empty():
+                    agent.add_action_sequence(
+                        [
+                            MoveAction(path=Pose.from_xyz(x, 1.0, 0.1)),
+                            WaitAction(duration=0.5),
+                            MoveAction(path=Pose.from_xyz(x, 0.0, 0.1)),
+                        ]
+                    )
+
+        sim.register_callback(refill)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            sim.step_once()
+        return (time.perf_counter() - t0) * 1e3 / steps
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tasks", type=int, default=1000)
+    parser.add_argument("--waits", type=int, default=1000)
+    parser.add_argument("--agents", type=int, default=1000)
+    parser.add_argument("--steps", type=int, default=600)
+    args = parser.parse_args(argv)
+    for backend in ("asyncio", "trio"):
+        us = sleep_bench(args.tasks, args.waits, backend)
+        print(f"sleep  {backend:<8} {args.tasks} tasks x {args.waits} waits: {us:6.2f} us per wait")
+    queues = fleet_queues(args.agents, args.steps)
+    print(f"fleet  queues   {args.agents} agents: {queues:7.3f} ms/step")
+    for backend in ("asyncio", "trio"):
+        missions = fleet_missions(args.agents, args.steps, backend)
+        overhead = (missions / queues - 1.0) * 100.0
+        print(
+            f"fleet  {backend:<8} {args.agents} agents: {missions:7.3f} ms/step ({overhead:+.0f}% vs queues)"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
