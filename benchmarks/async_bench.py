@@ -135,7 +135,8 @@ def main(argv: list[str] | None = None) -> int:
         missions = fleet_missions(args.agents, args.steps, backend)
         overhead = (missions / queues - 1.0) * 100.0
         print(
-            f"fleet  {backend:<8} {args.agents} agents: {missions:7.3f} ms/step ({overhead:+.0f}% vs queues)"
+            f"fleet  {backend:<8} {args.agents} agents: {missions:7.3f} ms/step "
+            f"({overhead:+.0f}% vs queues)"
         )
     return 0
 
