@@ -134,23 +134,32 @@ class Runtime:
         on_done: Callable[[], None] | None = None,
         box: list[Any] | None = None,
     ) -> None:
-        """Start a mission in anyio task group ``tg``; it counts as runnable from now."""
+        """Start a mission in anyio task group ``tg``; it counts as runnable from now.
+
+        A new mission first parks on a start gate, and the gates open in key order like any
+        other wake: the backend's scheduling order of new tasks never decides which mission
+        runs first.
+        """
+        mission = Mission(key, name)
+        gate = Waiter(mission, "start")
         self.runnable += 1
         self.alive += 1
-        tg.start_soon(self._run_mission, fn, args, key, name, on_done, box, name=name)
+        self.schedule_wake(gate)
+        tg.start_soon(self._run_mission, fn, args, mission, gate, on_done, box, name=name)
 
     async def _run_mission(
         self,
         fn: Callable[..., Awaitable[Any]],
         args: tuple[Any, ...],
-        key: tuple[int, ...],
-        name: str,
+        mission: Mission,
+        gate: Waiter,
         on_done: Callable[[], None] | None,
         box: list[Any] | None,
     ) -> None:
-        task_id = self.parker.current_task()
-        self._missions[task_id] = Mission(key, name)
+        task = self.parker.current_task()
+        self._missions[task] = mission
         try:
+            await self.park(gate)
             result = await fn(*args)
             if box is not None:
                 box.append(result)
@@ -159,10 +168,10 @@ class Runtime:
         except BaseException as exc:
             notes = getattr(exc, "__notes__", [])
             if hasattr(exc, "add_note") and not any(n.startswith("in mission ") for n in notes):
-                exc.add_note(f"in mission {name!r} at sim time {self.sim.sim_time:.3f} s")
+                exc.add_note(f"in mission {mission.name!r} at sim time {self.sim.sim_time:.3f} s")
             raise
         finally:
-            del self._missions[task_id]
+            del self._missions[task]
             self.alive -= 1
             if on_done is not None:
                 on_done()
@@ -223,23 +232,19 @@ class Runtime:
     # ----- settling and stepping --------------------------------------------------------------
 
     async def settle(self) -> None:
-        """Return once every mission is parked (or done)."""
+        """Deliver pending wakes in key order until every mission is parked (or done)."""
         with anyio.move_on_after(self.watchdog) as scope:
             while True:
-                if self.runnable == 0:
-                    if not self.parker.needs_recheck:
-                        return
-                    # asyncio resumes a cancelled task (which then counts itself runnable)
-                    # one loop iteration after the cancel: look again after it had its turn.
-                    await anyio.lowlevel.cancel_shielded_checkpoint()
-                    await anyio.lowlevel.cancel_shielded_checkpoint()
-                    if self.runnable == 0:
-                        return
-                    continue
-                driver = Waiter(None, "driver")
-                self.parker.prepare(driver)
-                self._driver = driver
-                await self.parker.wait(driver, lambda w: setattr(w, "done", True))
+                await self._quiesce()
+                if not self._wakes:
+                    return
+                if self.parker.one_at_a_time:
+                    _, _, waiter, value, error = heapq.heappop(self._wakes)
+                    self.wake(waiter, value, error)
+                else:
+                    wakes, self._wakes = sorted(self._wakes, key=lambda w: (w[0], w[1])), []
+                    for _, _, waiter, value, error in wakes:
+                        self.wake(waiter, value, error)
         if scope.cancelled_caught:
             running = sorted(m.name for m in self._missions.values() if m.waiter is None)
             raise MissionStalledError(
@@ -247,6 +252,24 @@ class Runtime:
                 f"at sim time {self.sim.sim_time:.3f} s "
                 "(a wall-clock sleep or I/O inside a mission?)"
             )
+
+    async def _quiesce(self) -> None:
+        """Wait until the runnable count is zero."""
+        while True:
+            if self.runnable == 0:
+                if not self.parker.needs_recheck:
+                    return
+                # asyncio resumes a cancelled task (which then counts itself runnable) one
+                # loop iteration after the cancel: look again after it had its turn.
+                await anyio.lowlevel.cancel_shielded_checkpoint()
+                await anyio.lowlevel.cancel_shielded_checkpoint()
+                if self.runnable == 0:
+                    return
+                continue
+            driver = Waiter(None, "driver")
+            self.parker.prepare(driver)
+            self._driver = driver
+            await self.parker.wait(driver, lambda w: setattr(w, "done", True))
 
     def check_deadlock(self) -> None:
         """Raise if missions are alive but nothing that stepping does can wake any of them."""
@@ -267,13 +290,12 @@ class Runtime:
             _, _, _, waiter = heapq.heappop(self._timers)
             self.schedule_wake(waiter)
         if self._conditions:
-            for ident, (waiter, predicate) in sorted(
-                self._conditions.items(), key=lambda kv: kv[1][0].mission.key
-            ):
+            ready = sorted(self._conditions.items(), key=lambda kv: kv[1][0].mission.key)
+            for ident, (waiter, predicate) in ready:
                 if predicate():
                     del self._conditions[ident]
                     self.schedule_wake(waiter)
-        await self._deliver()
+        await self.settle()
         due = []
         while self._timeouts and self._timeouts[0][0] <= step:
             due.append(heapq.heappop(self._timeouts)[2])
@@ -281,19 +303,6 @@ class Runtime:
             timeout.fire()
         if due:
             await self.settle()
-
-    async def _deliver(self) -> None:
-        wakes, self._wakes = sorted(self._wakes, key=lambda w: (w[0], w[1])), []
-        if not wakes:
-            return
-        for _, _, waiter, value, error in wakes:
-            self.wake(waiter, value, error)
-            if self.parker.one_at_a_time:
-                await self.settle()
-        if not self.parker.one_at_a_time:
-            await self.settle()
-        if self._wakes:  # woken missions may have woken others (sim Events, locks)
-            await self._deliver()
 
     # ----- sim-time waits ---------------------------------------------------------------------
 

@@ -82,8 +82,8 @@ def scenario(backend: str, seed: int = 7) -> list:
         )
 
         async def worker(robot):
-            jitter = sim.mission_rng().uniform(0.0, 0.5)
-            await sim.sleep(jitter)
+            if robot.name in ("r1", "r3"):  # the others claim at once, all in the same instant
+                await sim.sleep(sim.mission_rng().uniform(0.0, 0.5))
             free = [p for p in pallets if p.name not in claimed]
             if not free:
                 trace.append(("idle", sim.step_count, robot.name))
@@ -112,10 +112,10 @@ def scenario(backend: str, seed: int = 7) -> list:
 
 def test_same_seed_same_trace_run_after_run_and_across_backends():
     first = scenario("asyncio")
-    again = scenario("asyncio")
-    trio_run = scenario("trio")
-    assert first == again
-    assert first == trio_run
+    assert scenario("asyncio") == first
+    # trio shuffles runnable tasks on purpose; several runs give the shuffle room to show.
+    for _ in range(4):
+        assert scenario("trio") == first
     kinds = {entry[0] for entry in first}
     assert {"poses", "event", "done", "claims"} <= kinds
     assert sum(1 for e in first if e[0] == "done") == 3  # three pallets, three deliveries
