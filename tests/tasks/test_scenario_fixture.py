@@ -36,7 +36,7 @@ def test_an_unfinished_test_mission_fails(pytester):
 
 @pytest.mark.parametrize("fleet_backend", ["trio"])
 async def test_backend_can_be_pinned(fleet_sim, fleet_backend):
-    import trio  # noqa: PLC0415
+    import trio
 
     await fleet_sim.sleep(0.2)
     assert trio.lowlevel.current_task() is not None
