@@ -97,6 +97,11 @@ class Action(ABC):
     def on_cancel(self, agent: Agent) -> None:  # noqa: B027  # optional hook, empty by default
         """Clean up after being cancelled while running (the queue has already stopped motion)."""
 
+    @property
+    def in_queue(self) -> bool:
+        """Whether the action sits in an agent's queue or is running from it."""
+        return self._cancel_hook is not None
+
     def bind_cancel_hook(self, hook: Callable[[Action], None] | None) -> None:
         """Set by the action queue: called when :meth:`cancel` runs."""
         self._cancel_hook = hook

@@ -72,10 +72,7 @@ class ActionQueue:
                 f"add_action: {type(action).__name__} is {action.status.value}; "
                 "reset() it to reuse it"
             )
-        if (
-            any(action is a for q in self._queued.values() for a in q)
-            or action in self._current.values()
-        ):
+        if action.in_queue:
             raise ValueError(f"add_action: this {type(action).__name__} is already queued")
         key = agent.object_id
         self._agents[key] = agent

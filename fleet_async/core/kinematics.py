@@ -29,9 +29,7 @@ import numpy as np
 
 from fleet_async.core.geometry import (
     Pose,
-    quat_angle_between,
     quat_from_euler,
-    quat_multiply,
     quat_slerp_batch,
     yaw_from_quats,
 )
@@ -373,50 +371,60 @@ class KinematicEngine:
             return
 
     def _start(self, slot: int, target_pos: np.ndarray, target_orn: np.ndarray) -> bool:
-        """Begin a segment to (target_pos, target_orn); False if there is nothing to do."""
+        """Begin a segment to (target_pos, target_orn); False if there is nothing to do.
+
+        Runs once per segment for one slot, so it works on Python floats: small numpy calls
+        would cost more than the arithmetic.
+        """
         row = self.row[slot]
-        p0 = self._store.position[row].copy()
-        q0 = self._store.orientation[row].copy()
-        delta = np.asarray(target_pos, dtype=float) - p0
-        length = float(np.linalg.norm(delta))
-        q1 = np.asarray(target_orn, dtype=float).copy()
-        self.q_goal[slot] = q1  # exactly as given: the pose on arrival (q1 may flip sign below)
-        theta = quat_angle_between(q0, q1)
+        px, py, pz = self._store.position[row].tolist()
+        ax, ay, az, aw = self._store.orientation[row].tolist()
+        tx, ty, tz = (float(v) for v in target_pos)
+        bx, by, bz, bw = (float(v) for v in target_orn)
+        dx, dy, dz = tx - px, ty - py, tz - pz
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        dot = ax * bx + ay * by + az * bz + aw * bw
+        self.q_goal[slot] = (bx, by, bz, bw)  # exactly as given: the orientation on arrival
+        if dot < 0.0:  # shortest path: q and -q are the same rotation
+            bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
+        dot = min(dot, 1.0)
+        sl_theta = math.acos(dot)
+        theta = 2.0 * sl_theta  # rotation angle between the two orientations
         if length < _EPS_LEN and theta < _EPS_ANGLE:
             return False
         rate_v, rate_a = math.inf, math.inf
         if length >= _EPS_LEN:
-            unit = delta / length
-            rate_v = _axis_cap(self.vmax[slot], bool(self.lin_scalar[slot]), unit) / length
-            rate_a = _axis_cap(self.amax[slot], bool(self.lin_scalar[slot]), unit) / length
-        axis = np.zeros(3)
+            unit = np.array((dx / length, dy / length, dz / length))
+            scalar = bool(self.lin_scalar[slot])
+            rate_v = _axis_cap(self.vmax[slot], scalar, unit) / length
+            rate_a = _axis_cap(self.amax[slot], scalar, unit) / length
+        axis = (0.0, 0.0, 0.0)
         if theta >= _EPS_ANGLE:
-            rel = quat_multiply(q1, q0 * np.array([-1.0, -1.0, -1.0, 1.0]))
-            sin_half = float(np.linalg.norm(rel[:3]))
-            axis = rel[:3] / sin_half if sin_half > 0 else np.array([0.0, 0.0, 1.0])
-            if rel[3] < 0:
-                axis = -axis
-            rate_v = min(
-                rate_v, _axis_cap(self.wmax[slot], bool(self.ang_scalar[slot]), axis) / theta
+            # relative rotation q1 * conj(q0); its vector part is the axis times sin(theta / 2)
+            rx = bw * -ax + bx * aw + by * -az - bz * -ay
+            ry = bw * -ay - bx * -az + by * aw + bz * -ax
+            rz = bw * -az + bx * -ay - by * -ax + bz * aw
+            sin_half = math.sqrt(rx * rx + ry * ry + rz * rz)
+            axis = (
+                (rx / sin_half, ry / sin_half, rz / sin_half) if sin_half > 0 else (0.0, 0.0, 1.0)
             )
-            rate_a = min(
-                rate_a, _axis_cap(self.alpha[slot], bool(self.ang_scalar[slot]), axis) / theta
-            )
-        dot = float(q0 @ q1)
-        if dot < 0.0:
-            q1, dot = -q1, -dot
-        dot = min(dot, 1.0)
-        sl_theta = math.acos(dot)
-        self.p0[slot], self.p1[slot] = p0, target_pos
-        self.q0[slot], self.q1[slot] = q0, q1
-        self.sl_dot[slot], self.sl_theta[slot], self.sl_sin[slot] = (
-            dot,
-            sl_theta,
-            math.sin(sl_theta),
-        )
-        self.theta[slot], self.axis[slot] = theta, axis
-        self.u[slot], self.du[slot] = 0.0, 0.0
-        self.u_vmax[slot], self.u_amax[slot] = rate_v, rate_a
+            unit_axis = np.array(axis)
+            scalar = bool(self.ang_scalar[slot])
+            rate_v = min(rate_v, _axis_cap(self.wmax[slot], scalar, unit_axis) / theta)
+            rate_a = min(rate_a, _axis_cap(self.alpha[slot], scalar, unit_axis) / theta)
+        self.p0[slot] = (px, py, pz)
+        self.p1[slot] = (tx, ty, tz)
+        self.q0[slot] = (ax, ay, az, aw)
+        self.q1[slot] = (bx, by, bz, bw)
+        self.sl_dot[slot] = dot
+        self.sl_theta[slot] = sl_theta
+        self.sl_sin[slot] = math.sin(sl_theta)
+        self.theta[slot] = theta
+        self.axis[slot] = axis
+        self.u[slot] = 0.0
+        self.du[slot] = 0.0
+        self.u_vmax[slot] = rate_v
+        self.u_amax[slot] = rate_a
         self.mode[slot] = _POSE
         return True
 
