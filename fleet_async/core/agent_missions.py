@@ -9,17 +9,73 @@ is dropped, a running one stops the robot in that step.
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.action import Action, MoveAction, WaitAction
 from fleet_async.core.geometry import Path, Pose
 from fleet_async.core.pick_drop import DropAction, PickAction
+from fleet_async.core.types import ActionStatus
 
 if TYPE_CHECKING:
     from fleet_async.core.agent import Agent
     from fleet_async.core.mission_api import MissionRuntime
 
-__all__ = ["AgentMissionApi"]
+__all__ = ["ActionHandle", "AgentMissionApi"]
+
+
+class ActionHandle:
+    """A queued action: ``await handle`` waits for it (returning it, or raising if it failed
+    or was cancelled); ``cancel()`` cancels it; ``status``, ``phase`` and ``progress`` watch it.
+    """
+
+    def __init__(self, agent: Agent, action: Action) -> None:
+        self.agent = agent
+        self.action = action
+
+    @property
+    def status(self) -> ActionStatus:
+        """The action's status."""
+        return self.action.status
+
+    @property
+    def done(self) -> bool:
+        """Whether the action has ended."""
+        return self.action.is_complete()
+
+    @property
+    def phase(self) -> Any:
+        """The pick / drop phase, or None for actions without phases."""
+        return getattr(self.action, "phase", None)
+
+    @property
+    def progress(self) -> float:
+        """Rough completion in [0, 1]: waypoints reached for moves, time spent for waits."""
+        action = self.action
+        if action.is_complete():
+            return 1.0
+        if action.start_time is None:
+            return 0.0
+        if isinstance(action, WaitAction):
+            sim = self.agent.sim_core
+            if action.duration <= 0 or sim is None:
+                return 0.0
+            return min(1.0, (sim.sim_time - action.start_time) / action.duration)
+        if isinstance(action, MoveAction):
+            total = len(action.path)
+            return min(1.0, self.agent.current_waypoint_index / total) if total else 0.0
+        return 0.0
+
+    def cancel(self) -> None:
+        """Cancel the action (a queued one is dropped, a running one stops its robot now)."""
+        self.action.cancel()
+
+    def __await__(self) -> Generator[Any, None, Action]:
+        sim = self.agent.sim_core
+        runtime = None if sim is None else sim.mission_runtime
+        if runtime is None:
+            raise RuntimeError("awaiting an action needs a running mission (fleet_async.run)")
+        return runtime.wait_action(self.action, "await handle").__await__()
 
 
 class AgentMissionApi:
@@ -34,12 +90,15 @@ class AgentMissionApi:
             )
         return runtime
 
-    async def submit(self, action: Action) -> Action:
-        """Queue any action and wait for it to end."""
+    def submit(self, action: Action) -> ActionHandle:
+        """Queue ``action`` now and return a handle to await, cancel or watch it.
+
+        ``await agent.submit(action)`` waits for it to end, like the other commands.
+        """
+        self._mission_runtime("agent.submit")
         agent: Agent = self  # type: ignore[assignment]
-        return await self._mission_runtime("agent.submit").await_action(
-            agent, action, "agent.submit"
-        )
+        agent.add_action(action)
+        return ActionHandle(agent, action)
 
     async def move(self, path: Path | Pose | list[Pose], **options: Any) -> Action:
         """Follow ``path``; options as MoveAction (auto_approach, direction, ...)."""

@@ -15,14 +15,20 @@ from fleet_async.tasks.errors import (
     NoMissionRuntimeError,
 )
 from fleet_async.tasks.run import run, run_async
+from fleet_async.tasks.sync import Event, EventStream, Lock, Resource, Store
 
 __all__ = [
     "ActionCancelledError",
     "ActionFailedError",
+    "Event",
+    "EventStream",
+    "Lock",
     "MissionDeadlockError",
     "MissionError",
     "MissionStalledError",
     "NoMissionRuntimeError",
+    "Resource",
+    "Store",
     "run",
     "run_async",
 ]

@@ -273,9 +273,9 @@ class Runtime:
 
     def check_deadlock(self) -> None:
         """Raise if missions are alive but nothing that stepping does can wake any of them."""
-        if self.alive == 0 or self._timers or self._actions or self._conditions or self._timeouts:
+        if self.alive == 0 or self._timers or self._timeouts or self._wakes:
             return
-        if any(self._event_waits.values()):
+        if any(w.kind in _PROGRESSING for w in self._parked.values()):
             return
         waits = sorted((w.mission.name, w.kind) for w in self._parked.values())
         raise MissionDeadlockError(
@@ -332,19 +332,33 @@ class Runtime:
 
     async def await_action(self, agent: Agent, action: Action, what: str) -> Action:
         """Queue ``action`` on ``agent`` and park until it ends; return it or raise."""
-        mission = self.current(what)
-        waiter = Waiter(mission, "action")
-        key = id(action)
-
-        def undo() -> None:
-            self._actions.pop(key, None)
-            if not action.is_complete():
-                action.cancel()  # a queued action is dropped, a running one stops its robot now
-
-        waiter.on_abort = undo
+        self.current(what)
         agent.add_action(action)
-        self._actions[key] = waiter
-        await self.park(waiter)
+        return await self.wait_action(action, what)
+
+    async def wait_action(self, action: Action, what: str) -> Action:
+        """Park until a queued ``action`` ends; return it, or raise if it failed or was cancelled.
+
+        If the waiting mission is cancelled, the action is cancelled too: a queued action is
+        dropped, a running one stops its robot in this step.
+        """
+        mission = self.current(what)
+        if not action.is_complete():
+            if id(action) in self._actions:
+                raise RuntimeError(f"{what}: another mission is already waiting on this action")
+            waiter = Waiter(mission, "action")
+            key = id(action)
+
+            def undo() -> None:
+                self._actions.pop(key, None)
+                if not action.is_complete():
+                    action.cancel()
+
+            waiter.on_abort = undo
+            self._actions[key] = waiter
+            await self.park(waiter)
+        else:
+            await anyio.lowlevel.checkpoint()
         if action.status is ActionStatus.FAILED:
             raise ActionFailedError(action)
         if action.status is ActionStatus.CANCELLED:
@@ -434,6 +448,12 @@ class Runtime:
         from fleet_async.tasks.groups import race  # cycle
 
         return await race(self, *items)
+
+    def event_stream(self, name: str, where: Callable[..., bool] | None) -> Any:
+        """An async iterator over ``name`` events (``sim.events.stream``)."""
+        from fleet_async.tasks.sync import EventStream  # cycle
+
+        return EventStream(self.sim, name, where)
 
     def mission_rng(self) -> Any:
         """A random generator for the current mission, derived from the seed and its key."""
