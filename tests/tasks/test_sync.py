@@ -99,13 +99,15 @@ async def test_event_stream_yields_every_matching_event(fleet_sim):
         await agent.move(Pose.from_xyz(1, 0, 0.1))
         await agent.wait(0.5)
 
-    async with fleet_sim.events.stream(SimEvents.ACTION_COMPLETED) as completions:
-        async with fleet_sim.task_group() as tg:
-            tg.start_soon(mover)
-            async for payload in completions:
-                seen.append((type(payload["action"]).__name__, fleet_sim.sim_time))
-                if len(seen) == 2:
-                    break
+    async with (
+        fleet_sim.events.stream(SimEvents.ACTION_COMPLETED) as completions,
+        fleet_sim.task_group() as tg,
+    ):
+        tg.start_soon(mover)
+        async for payload in completions:
+            seen.append((type(payload["action"]).__name__, fleet_sim.sim_time))
+            if len(seen) == 2:
+                break
     assert [name for name, _ in seen] == ["MoveAction", "WaitAction"]
     assert seen[1][1] - seen[0][1] == pytest.approx(0.5)
 
