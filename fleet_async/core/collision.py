@@ -351,20 +351,15 @@ class CollisionSystem:
         t0 = time.perf_counter()
         store = self._sim.state
         high = store.high_water
-        moved_ids = set(store.object_id[:high][store.active[:high] & store.moved[:high]].tolist())
         row_pairs, timings = self.filter_pairs(ignore_static)
         t1 = time.perf_counter()
         touching = self._touching(row_pairs)
         t2 = time.perf_counter()
         ids = store.object_id[row_pairs].tolist() if len(row_pairs) else []
         now = {tuple(sorted(pair)) for pair, hit in zip(ids, touching, strict=True) if hit}
-        alive = set(store.object_id[:high][store.active[:high]].tolist())
-        ended = {
-            pair
-            for pair in self._active
-            if pair not in now
-            and (pair[0] in moved_ids or pair[1] in moved_ids or not {pair[0], pair[1]} <= alive)
-        }
+        # An active pair ends when it was re-checked (one side moved) and is no longer touching,
+        # or when one side left the simulation. Pairs where neither moved keep their state.
+        ended = {pair for pair in self._active if pair not in now and self._recheck(pair)}
         started = now - self._active
         self._active = (self._active - ended) | started
         store.moved[:high] = False
@@ -372,6 +367,14 @@ class CollisionSystem:
         timings["contact_points"] = (t2 - t1) * 1e3
         timings["total"] = (time.perf_counter() - t0) * 1e3
         return sorted(self._active), timings
+
+    def _recheck(self, pair: tuple[int, int]) -> bool:
+        store = self._sim.state
+        for object_id in pair:
+            obj = self._sim.get_object_by_id(object_id)
+            if obj is None or store.moved[obj.state_row]:
+                return True
+        return False
 
     def _emit(
         self,
