@@ -84,13 +84,12 @@ class Runtime:
         self.alive = 0
         self._missions: dict[Any, Mission] = {}  # backend task object -> mission
         self._seq = itertools.count()
-        self._timers: list[tuple[int, tuple[int, ...], int, Waiter]] = []
+        self._timers: dict[int, list[Waiter]] = {}  # wake step -> waiters (unordered)
         self._wakes: list[tuple[tuple[int, ...], int, Waiter, Any, BaseException | None]] = []
         self._actions: dict[int, Waiter] = {}
         self._conditions: dict[int, tuple[Waiter, Callable[[], bool]]] = {}
         self._event_waits: dict[str, dict[int, tuple[Waiter, Callable[..., bool] | None]]] = {}
         self._timeouts: list[tuple[int, int, SimTimeout]] = []
-        self._parked: dict[int, Waiter] = {}
         self._driver: Waiter | None = None
         self._event_handlers: dict[str, Callable[..., None]] = {}
         sim.events.on(SimEvents.ACTION_COMPLETED, self._on_action_end, priority=1_000_000)
@@ -199,7 +198,8 @@ class Runtime:
             return
         waiter.done = True
         self.runnable += 1  # the cancelled task runs again
-        self._parked.pop(id(waiter), None)
+        if waiter.bucket is not None and waiter in waiter.bucket:
+            waiter.bucket.remove(waiter)
         if waiter.on_abort is not None:
             waiter.on_abort()
 
@@ -207,7 +207,6 @@ class Runtime:
         """Suspend the current mission until ``wake(waiter)``; cancellable by anyio scopes."""
         self.parker.prepare(waiter)
         waiter.mission.waiter = waiter
-        self._parked[id(waiter)] = waiter
         self._decrement()
         try:
             return await self.parker.wait(waiter, self._aborted)
@@ -219,7 +218,6 @@ class Runtime:
         if waiter.done:
             return
         waiter.done = True
-        self._parked.pop(id(waiter), None)
         self.runnable += 1
         self.parker.wake(waiter, value, error)
 
@@ -275,9 +273,10 @@ class Runtime:
         """Raise if missions are alive but nothing that stepping does can wake any of them."""
         if self.alive == 0 or self._timers or self._timeouts or self._wakes:
             return
-        if any(w.kind in _PROGRESSING for w in self._parked.values()):
+        parked = [m.waiter for m in self._missions.values() if m.waiter is not None]
+        if any(w.kind in _PROGRESSING for w in parked):
             return
-        waits = sorted((w.mission.name, w.kind) for w in self._parked.values())
+        waits = sorted((w.mission.name, w.kind) for w in parked)
         raise MissionDeadlockError(
             f"deadlock at sim time {self.sim.sim_time:.3f} s: missions are alive but every one "
             f"waits on another mission: {waits}"
@@ -286,8 +285,7 @@ class Runtime:
     async def after_step(self) -> None:
         """Deliver this step's wakes in key order, settle, then fire due sim-time timeouts."""
         step = self.sim.step_count
-        while self._timers and self._timers[0][0] <= step:
-            _, _, _, waiter = heapq.heappop(self._timers)
+        for waiter in self._timers.pop(step, ()):
             self.schedule_wake(waiter)
         if self._conditions:
             ready = sorted(self._conditions.items(), key=lambda kv: kv[1][0].mission.key)
@@ -319,15 +317,9 @@ class Runtime:
             await anyio.lowlevel.checkpoint()
             return
         waiter = Waiter(mission, "timer")
-        entry = (self.sim.step_count + steps, mission.key, next(self._seq), waiter)
-
-        def undo() -> None:
-            if entry in self._timers:
-                self._timers.remove(entry)
-                heapq.heapify(self._timers)
-
-        waiter.on_abort = undo
-        heapq.heappush(self._timers, entry)
+        bucket = self._timers.setdefault(self.sim.step_count + steps, [])
+        waiter.bucket = bucket  # no per-wait closure: _aborted takes it out of the bucket
+        bucket.append(waiter)
         await self.park(waiter)
 
     async def await_action(self, agent: Agent, action: Action, what: str) -> Action:
