@@ -299,7 +299,9 @@ def test_wall_clock_wait_is_reported_by_the_watchdog(backend):
     with _sim() as sim:
 
         async def main():
-            await anyio.sleep(0.5)  # a wall-clock wait holds the clock
+            # A non-sim wait (here an event nobody sets) holds the clock; only the watchdog's
+            # own wall-clock limit ends it.
+            await anyio.Event().wait()
 
         leaves = _run_expecting(sim, main, backend, watchdog=0.05)
         assert any(isinstance(e, MissionStalledError) and "main" in str(e) for e in leaves)
