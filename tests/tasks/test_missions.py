@@ -314,3 +314,33 @@ def test_sim_awaits_outside_a_run_are_errors():
             anyio.run(sim.sleep, 1.0)
         with pytest.raises(RuntimeError, match=r"fleet_async\.run"):
             anyio.run(agent.move, Pose.from_xyz(1, 0, 0.1))
+
+
+@pytest.mark.parametrize("backend", ["asyncio", "trio"])
+def test_real_io_holds_the_clock_and_run_async_works_in_a_loop(backend):
+    """A mission awaiting something outside the simulation stops the clock until it is back."""
+    with _sim() as sim:
+        send, receive = anyio.create_memory_object_stream[str](1)
+        seen = []
+
+        async def outside_world():
+            for _ in range(50):  # plenty of loop iterations: the sim must not step meanwhile
+                await anyio.lowlevel.checkpoint()
+            await send.send("reply")
+
+        async def mission():
+            await sim.sleep(0.5)
+            before = sim.step_count
+            seen.append(await receive.receive())
+            seen.append(sim.step_count - before)
+            await sim.sleep(0.5)
+            return sim.step_count
+
+        async def app():
+            async with anyio.create_task_group() as tg:
+                tg.start_soon(outside_world)
+                result = await fa.run_async(sim, mission)
+            return result
+
+        assert anyio.run(app, backend=backend) == 10
+        assert seen == ["reply", 0]
