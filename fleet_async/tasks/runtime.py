@@ -180,7 +180,15 @@ class Runtime:
 
     def _decrement(self) -> None:
         self.runnable -= 1
-        if self.runnable == 0 and self._driver is not None and not self._driver.done:
+        if self.runnable != 0:
+            return
+        if self.parker.one_at_a_time and self._wakes and self._driver is not None:
+            # Baton: while the driver waits, the mission that just parked hands the turn
+            # straight to the next wake in key order, without a round trip to the driver.
+            _, _, waiter, value, error = heapq.heappop(self._wakes)
+            self.wake(waiter, value, error)
+            return
+        if self._driver is not None and not self._driver.done:
             driver, self._driver = self._driver, None
             driver.done = True
             self.parker.wake(driver)
