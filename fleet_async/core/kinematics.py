@@ -217,10 +217,6 @@ class KinematicEngine:
         self._plans[slot] = None
         heapq.heappush(self._free, slot)
 
-    def set_kind(self, slot: int, kind: int) -> None:
-        """Switch a slot between omni and differential (it must be idle)."""
-        self.kind[slot] = kind
-
     def set_limits(self, slot: int, limits: MotionLimits) -> None:
         """Replace a slot's kinematic limits (applies from the next segment)."""
         # Called once per spawned agent: plain assignments, no temporary arrays.
@@ -239,10 +235,6 @@ class KinematicEngine:
         if mode == _POSE:
             return True
         return bool(mode == _VELOCITY and (self.vel[slot].any() or self.cmd[slot].any()))
-
-    def in_velocity_mode(self, slot: int) -> bool:
-        """Whether the slot follows a velocity command."""
-        return bool(self.mode[slot] == _VELOCITY)
 
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""

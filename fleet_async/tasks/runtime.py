@@ -38,7 +38,6 @@ from fleet_async.tasks.parking import Waiter, parker_for_backend
 
 if TYPE_CHECKING:
     from fleet_async.core.action import Action
-    from fleet_async.core.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.tasks.timeouts import SimTimeout
 
@@ -329,12 +328,6 @@ class Runtime:
         waiter.bucket = bucket  # no per-wait closure: _aborted takes it out of the bucket
         bucket.append(waiter)
         await self.park(waiter)
-
-    async def await_action(self, agent: Agent, action: Action, what: str) -> Action:
-        """Queue ``action`` on ``agent`` and park until it ends; return it or raise."""
-        self.current(what)
-        agent.add_action(action)
-        return await self.wait_action(action, what)
 
     async def wait_action(self, action: Action, what: str) -> Action:
         """Park until a queued ``action`` ends; return it, or raise if it failed or was cancelled.
