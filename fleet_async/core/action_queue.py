@@ -88,20 +88,31 @@ class ActionQueue:
         if current is not None:
             current.cancel()
 
-    def forget(self, agent: Agent) -> None:
-        """Drop the agent's actions silently (the agent left the simulation)."""
+    def forget(self, agent: Agent, reason: str = "its agent left the simulation") -> None:
+        """Drop the agent's actions: each ends CANCELLED with ``reason`` (ACTION_FAILED is
+        emitted), so nobody waiting on one waits forever."""
         key = agent.object_id
-        for action in [
-            *self._queued.pop(key, ()),
+        dropped = [
             *([self._current.pop(key)] if key in self._current else []),
-        ]:
-            action.bind_cancel_hook(None)
+            *self._queued.pop(key, ()),
+        ]
         self._agents.pop(key, None)
         self._due.discard(key)
         self._on_motion.discard(key)
+        for action in dropped:
+            action.bind_cancel_hook(None)
+            if not action.is_complete():
+                action.status = ActionStatus.CANCELLED
+                action.error_message = reason
+                action.end_time = self._sim.sim_time
+                self._emit(SimEvents.ACTION_FAILED, agent, action)
 
     def reset(self) -> None:
-        """Forget every queue (simulation reset)."""
+        """Forget every queue (simulation reset); unfinished actions end CANCELLED."""
+        for key in sorted(set(self._queued) | set(self._current)):
+            agent = self._agents.get(key)
+            if agent is not None:
+                self.forget(agent, "the simulation was reset")
         self._queued.clear()
         self._current.clear()
         self._agents.clear()

@@ -575,8 +575,8 @@ class MultiRobotSimulationCore(SimMissionApi):
         Callbacks, plugins (which get ``on_reset``) and managers (cleared) are kept. The random
         generator is reseeded with ``seed``, or with ``params.seed``.
         """
+        self._fleet.reset()  # first: unfinished actions end CANCELLED while agents are bound
         removed = self._world.clear()
-        self._fleet.reset()
         self._collision.reset()
         for manager in self._managers:
             manager.clear()

@@ -382,3 +382,19 @@ def test_attach_link_by_name_on_a_urdf_robot(sim):
     assert agent.get_pose().position.tolist() == pytest.approx([1.0, 0.0, 0.15])
     assert item.get_pose().z > agent.get_pose().z  # rides on the mast link
     assert np.isfinite(item.get_pose().position).all()
+
+
+def test_reset_cancels_unfinished_actions_with_a_reason(sim):
+    agent = robot(sim)
+    move, wait = MoveAction(path=Pose.from_xyz(5, 0, 0.1)), WaitAction(duration=1.0)
+    agent.add_action_sequence([move, wait])
+    failed = []
+    sim.events.on(
+        SimEvents.ACTION_FAILED, lambda **kw: failed.append((kw["agent"].object_id, kw["action"]))
+    )
+    sim.step_once()
+    object_id = agent.object_id
+    sim.reset()
+    assert move.status is ActionStatus.CANCELLED and wait.status is ActionStatus.CANCELLED
+    assert "reset" in move.error_message
+    assert failed == [(object_id, move), (object_id, wait)]

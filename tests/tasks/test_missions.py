@@ -344,3 +344,17 @@ def test_real_io_holds_the_clock_and_run_async_works_in_a_loop(backend):
 
         assert anyio.run(app, backend=backend) == 10
         assert seen == ["reply", 0]
+
+
+async def test_removing_an_agent_ends_the_awaited_action(fleet_sim):
+    agent = robot(fleet_sim)
+
+    async def remover():
+        await fleet_sim.sleep(0.5)
+        fleet_sim.remove_object(agent)
+
+    async with fleet_sim.task_group() as tg:
+        tg.start_soon(remover)
+        with pytest.raises(ActionCancelledError, match="left the simulation"):
+            await agent.move(Pose.from_xyz(10, 0, 0.1))
+    assert fleet_sim.step_count == 5
