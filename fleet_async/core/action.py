@@ -161,6 +161,9 @@ class MoveAction(Action):
         """Send the path on the first call; complete when motion ends at the goal."""
         if not self._started:
             self._started = True
+            blocker = agent.motion_blocker
+            if blocker is not None:
+                return self.fail(f"cannot move: {blocker}")
             agent.set_path(
                 self.path.waypoints,
                 auto_approach=self.auto_approach,

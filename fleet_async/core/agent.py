@@ -459,6 +459,15 @@ class Agent(AgentMissionApi, SimObject):
 
     # ----- motion -------------------------------------------------------------------------
 
+    @property
+    def motion_blocker(self) -> str | None:
+        """Why this agent cannot move (fixed base, no base controller), or None if it can."""
+        if self.use_fixed_base:
+            return f"{self!r} has a fixed base"
+        if not isinstance(self.controller, KinematicController):
+            return f"{self!r} has no base controller (movement disabled)"
+        return None
+
     def _base(self, what: str) -> KinematicController | None:
         if self.use_fixed_base:
             logger.warning("%s ignored: %r has a fixed base", what, self)

@@ -130,6 +130,9 @@ class _ApproachAction(Action):
             ):
                 self._stages.popleft()
                 continue
+            blocker = agent.motion_blocker
+            if blocker is not None:
+                return self.fail(f"cannot move to the {self.phase.value} pose: {blocker}")
             agent.set_path([pose], direction=stage[3])
             self._moving = True
             return False

@@ -398,3 +398,17 @@ def test_reset_cancels_unfinished_actions_with_a_reason(sim):
     assert move.status is ActionStatus.CANCELLED and wait.status is ActionStatus.CANCELLED
     assert "reset" in move.error_message
     assert failed == [(object_id, move), (object_id, wait)]
+
+
+def test_moves_fail_with_a_reason_when_the_agent_cannot_move(sim):
+    fixed = robot(sim, use_fixed_base=True)
+    move = MoveAction(path=Pose.from_xyz(3, 0, 0.1))
+    fixed.add_action(move)
+    sim.step_once()
+    assert move.status is ActionStatus.FAILED and "fixed base" in move.error_message
+    frozen = robot(sim, xyz=(0.0, 5.0, 0.1))
+    frozen.set_controller(None)
+    pick = PickAction(target_object_id=crate(sim, (3.0, 5.0, 0.1)).body_id)
+    frozen.add_action(pick)
+    sim.step_once()
+    assert pick.status is ActionStatus.FAILED and "no base controller" in pick.error_message
