@@ -96,6 +96,10 @@ class AttachmentSet:
         """Objects attached to ``parent``, in attachment order."""
         return [a.child for a in self._children.get(parent.object_id, ())]
 
+    def parent_ids(self) -> set[int]:
+        """Object ids of everything that carries something."""
+        return set(self._children)
+
     def descendants(self, parent: SimObject) -> list[SimObject]:
         """Everything ``parent`` carries, directly or nested, parents before children."""
         out: list[SimObject] = []

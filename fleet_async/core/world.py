@@ -235,11 +235,25 @@ class World:
             raise ValueError(
                 f"set_poses: orientation of object {object_ids[bad]} is a zero quaternion"
             )
-        self._store.position[rows] = pos
-        self._store.orientation[rows] = orn / norms[:, None]
-        self._store.mark_moved(rows)
-        for object_id in object_ids:
-            self.on_pose_written(self._objects[int(object_id)], preserve_velocity)
+        store = self._store
+        store.position[rows] = pos
+        store.orientation[rows] = orn / norms[:, None]
+        store.mark_moved(rows)
+        # Only objects that carry something, or that PyBullet owns, need per-object work.
+        carried: list[int] = []
+        if len(self._attachments):
+            for object_id in self._attachments.parent_ids().intersection(
+                int(i) for i in object_ids
+            ):
+                parent = self._objects[object_id]
+                self._attachments.follow_parent(parent)
+                carried += [c.state_row for c in self._attachments.descendants(parent)]
+        for row in rows[~store.kinematic[rows]].tolist():
+            self._push_dynamic(row, preserve_velocity)
+        if not self.in_step:
+            self._backend.push_rows(
+                store, np.concatenate([rows, np.array(carried, dtype=np.int64)])
+            )
 
     def get_poses(self, object_ids: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """Return (positions (N, 3), orientations (N, 4)) copies for N objects.

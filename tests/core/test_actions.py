@@ -357,12 +357,15 @@ def test_an_action_that_raises_fails_loudly(sim):
 
 def test_removing_an_agent_drops_its_actions(sim):
     agent = robot(sim)
-    agent.add_action(MoveAction(path=Pose.from_xyz(5, 0, 0.1)))
+    move, wait = MoveAction(path=Pose.from_xyz(5, 0, 0.1)), WaitAction(duration=1.0)
+    agent.add_action_sequence([move, wait])
     sim.step_once()
     sim.remove_object(agent)
     for _ in range(3):
         sim.step_once()
     assert sim.agents == []
+    assert move.status is ActionStatus.CANCELLED and wait.status is ActionStatus.CANCELLED
+    assert "left the simulation" in move.error_message
 
 
 def test_attach_link_by_name_on_a_urdf_robot(sim):

@@ -369,3 +369,12 @@ def test_time_profiling_logs_a_summary_every_interval(caplog):
         "over 10 steps" in summaries[-1].getMessage()
         and "agent_update=" in summaries[-1].getMessage()
     )
+
+
+def test_set_poses_moves_carried_objects_and_reaches_pybullet(sim):
+    carrier, crate = box(sim), box(sim, x=5)
+    carrier.attach_object(crate, relative_pose=Pose.from_xyz(0, 0, 0.3))
+    sim.set_poses([carrier.object_id], np.array([[2.0, 1.0, 0.5]]), np.array([[0, 0, 0, 1.0]]))
+    assert crate.get_pose().position.tolist() == pytest.approx([2.0, 1.0, 0.8])
+    pos, _ = p.getBasePositionAndOrientation(crate.body_id, physicsClientId=sim.client)
+    assert pos == pytest.approx((2.0, 1.0, 0.8))
