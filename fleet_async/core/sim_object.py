@@ -532,6 +532,11 @@ class SimObject:
 def create_body(params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None) -> int:
     """Create the PyBullet multibody for ``params`` and return its body id."""
     client = 0 if sim_core is None else sim_core.client
+    if sim_core is None and not p.isConnected(physicsClientId=0):
+        raise RuntimeError(
+            "cannot create a body: no sim_core was given and no PyBullet client is connected; "
+            "pass sim_core=MultiRobotSimulationCore(...)"
+        )
     search = [] if sim_core is None else list(sim_core.params.model_paths or [])
     visual, collision = params.visual_shape, params.collision_shape
     if visual is not None and params.visual_frame_pose is not None:
