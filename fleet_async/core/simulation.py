@@ -37,12 +37,15 @@ from fleet_async.core.monitor import DataMonitor, SimulationMonitor
 from fleet_async.core.params import SimulationParams
 from fleet_async.core.plugins import SimPlugin
 from fleet_async.core.profiling import MemoryProfiler, StepProfiler
+from fleet_async.core.recording import RecordingApi
 from fleet_async.core.runner import run_loop
+from fleet_async.core.scenario import ScenarioApi
 from fleet_async.core.scheduling import PeriodicSchedule
 from fleet_async.core.sim_object import SimObject
 from fleet_async.core.state import KinematicState
 from fleet_async.core.types import SpatialHashCellSizeMode, coerce_enum
 from fleet_async.core.world import World
+from fleet_async.core.world_loader import WorldLoadingApi
 
 __all__ = ["MotionSystem", "MultiRobotSimulationCore"]
 
@@ -58,7 +61,7 @@ class MotionSystem(Protocol):
         """Move every object this system owns by one step of ``dt`` seconds."""
 
 
-class MultiRobotSimulationCore(SimMissionApi):
+class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, RecordingApi):
     """A multi-robot simulation on one PyBullet client.
 
     Args:
@@ -553,6 +556,7 @@ class MultiRobotSimulationCore(SimMissionApi):
             if self._monitor is not None:
                 self._monitor.monitor.stop()
                 self._monitor = None
+            self._stop_recording_after_run()
 
     def _gui_idle(self) -> None:
         gui.handle_keyboard(self)
