@@ -14,6 +14,7 @@ from fleet_async.core.action import (
     WaitAction,
 )
 from fleet_async.core.agent import Agent
+from fleet_async.core.arm_actions import JointAction, PoseAction
 from fleet_async.core.agent_manager import AgentManager
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin
@@ -102,6 +103,7 @@ __all__ = [
     "EventBus",
     "GridSpawnParams",
     "IKParams",
+    "JointAction",
     "KinematicController",
     "LazyLogger",
     "MotionMode",
@@ -113,6 +115,7 @@ __all__ = [
     "Path",
     "PatrolController",
     "PickAction",
+    "PoseAction",
     "PickPhase",
     "Pose",
     "PosePhase",

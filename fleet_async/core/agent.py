@@ -18,6 +18,7 @@ import numpy as np
 import pybullet as p
 
 from fleet_async.core.action import Action
+from fleet_async.core.agent_joints import AgentJointsApi
 from fleet_async.core.agent_missions import AgentMissionApi
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin, create_agent_plugin
@@ -33,6 +34,7 @@ from fleet_async.core.controllers import (
 )
 from fleet_async.core.events import SimEvents
 from fleet_async.core.geometry import Path, Pose
+from fleet_async.core.joints import JointSet
 from fleet_async.core.models import resolve_model
 from fleet_async.core.sim_object import SimObject, create_body
 from fleet_async.core.types import CollisionMode, MotionMode, MovementDirection, coerce_enum
@@ -85,7 +87,7 @@ def _mesh_kwargs(spawn_params: AgentSpawnParams) -> dict[str, Any]:
     }
 
 
-class Agent(AgentMissionApi, SimObject):
+class Agent(AgentMissionApi, AgentJointsApi, SimObject):
     """A robot: mobile (omni / differential) or fixed-base, mesh, URDF or virtual.
 
     Args:
@@ -110,9 +112,6 @@ class Agent(AgentMissionApi, SimObject):
     is_agent: ClassVar[bool] = True
     spawned_event: ClassVar[str | None] = SimEvents.AGENT_SPAWNED
     removed_event: ClassVar[str | None] = SimEvents.AGENT_REMOVED
-    _KINEMATIC_JOINT_FALLBACK_VELOCITY: ClassVar[float] = 2.0
-    _KINEMATIC_PRISMATIC_FALLBACK_VELOCITY: ClassVar[float] = 0.5
-    _DEFAULT_JOINT_TOLERANCE: ClassVar[float] = 0.01
 
     def __init__(
         self,
@@ -135,6 +134,7 @@ class Agent(AgentMissionApi, SimObject):
         self.use_fixed_base = bool(use_fixed_base)
         self._ik_params = ik_params if ik_params is not None else IKParams()
         self._joint_tolerance = joint_tolerance
+        self._joint_set: JointSet | None = None
         self.path_visualize = False
         self.path_visualize_width = 2.0
         self.motion_result: bool | None = None
@@ -732,32 +732,6 @@ class Agent(AgentMissionApi, SimObject):
         if battery is not None:
             battery.charging = bool(charging)
 
-    # ----- joints (arms arrive with the arms issue) ---------------------------------------
-
-    def is_urdf_robot(self) -> bool:
-        """Whether the agent was loaded from a URDF."""
-        return self.urdf_path is not None
-
-    def get_num_joints(self) -> int:
-        """Number of joints (0 for mesh and virtual agents)."""
-        if not self.is_urdf_robot() or self.sim_core is None:
-            return 0
-        return int(p.getNumJoints(self.body_id, physicsClientId=self.sim_core.client))
-
-    @property
-    def ik_params(self) -> IKParams:
-        """IK solver settings."""
-        return self._ik_params
-
-    @property
-    def joint_tolerance(self) -> float | list[float] | dict[str, float]:
-        """Default joint tolerance (the class default 0.01 when unset)."""
-        return (
-            self._DEFAULT_JOINT_TOLERANCE
-            if self._joint_tolerance is None
-            else self._joint_tolerance
-        )
-
     # ----- lifecycle ----------------------------------------------------------------------
 
     def on_removed(self) -> None:
@@ -765,6 +739,7 @@ class Agent(AgentMissionApi, SimObject):
         sim = self.sim_core
         if sim is not None:
             sim.fleet.forget(self)
+            sim.joint_motion.forget(self)
         self._release_slot()
         for plugin in self._plugins:
             plugin.on_remove()

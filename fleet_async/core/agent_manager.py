@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fleet_async.core.agent import Agent
@@ -263,17 +263,18 @@ class AgentManager(SimObjectManager[Agent]):
         return sum(1 for agent in self.objects if agent.is_moving)
 
     def set_joints_targets_all(
-        self, targets_factory: Callable[[Agent], Sequence[float]], max_force: float = 500.0
+        self,
+        targets_factory: Callable[[Agent], Sequence[float] | Mapping[str, float]],
+        max_force: float = 500.0,
     ) -> None:
-        """``agent.set_joints_targets(targets_factory(agent), max_force=max_force)`` for arms.
+        """``agent.set_joints_targets(targets_factory(agent), max_force)`` for every arm.
 
-        Agents without joints, or without a ``set_joints_targets`` method, are skipped (the
-        factory is not called for them).
+        Agents without joints (mobile robots, mesh robots) are skipped, and the factory is not
+        called for them.
         """
         for agent in list(self.objects):
-            setter = getattr(agent, "set_joints_targets", None)
-            if callable(setter) and agent.get_num_joints() > 0:
-                setter(targets_factory(agent), max_force=max_force)
+            if agent.get_num_joints() > 0:
+                agent.set_joints_targets(targets_factory(agent), max_force=max_force)
 
     # ----- actions ------------------------------------------------------------------------
 

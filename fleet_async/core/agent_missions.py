@@ -13,6 +13,7 @@ from collections.abc import Generator
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.action import Action, MoveAction, WaitAction
+from fleet_async.core.arm_actions import JointAction, PoseAction
 from fleet_async.core.geometry import Path, Pose
 from fleet_async.core.pick_drop import DropAction, PickAction
 from fleet_async.core.types import ActionStatus
@@ -79,7 +80,8 @@ class ActionHandle:
 
 
 class AgentMissionApi:
-    """Mixin for Agent: ``await agent.move(...)``, ``pick``, ``drop``, ``wait``, ``charge``."""
+    """Mixin for Agent: ``await agent.move(...)``, ``pick``, ``drop``, ``wait``, ``charge``,
+    ``move_joints``, ``reach_pose``."""
 
     def _mission_runtime(self, what: str) -> MissionRuntime:
         sim = getattr(self, "sim_core", None)
@@ -126,3 +128,17 @@ class AgentMissionApi:
     async def charge(self, duration: float) -> Action:
         """Charge the battery for ``duration`` sim seconds."""
         return await self.wait(duration, action_type="charge")
+
+    async def move_joints(self, targets: Any, **options: Any) -> Action:
+        """Move joints to ``targets`` (a list, or {joint name: position}) as a JointAction;
+        options: ``max_force``, ``tolerance``."""
+        return await self.submit(JointAction(target_joint_positions=targets, **options))
+
+    async def reach_pose(self, position: Any, orientation: Any = None, **options: Any) -> Action:
+        """Bring the end effector to ``position`` ([x, y, z], world frame) and optionally
+        ``orientation`` ([qx, qy, qz, qw]) through IK, as a PoseAction (raises
+        ActionFailedError when it is out of reach); options: ``end_effector_link``,
+        ``max_force``, ``tolerance``."""
+        return await self.submit(
+            PoseAction(target_position=position, target_orientation=orientation, **options)
+        )

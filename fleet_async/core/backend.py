@@ -192,9 +192,9 @@ class PyBulletBackend:
             p.removeBody(body_id, physicsClientId=self._client)
             forget_body_shape(self._client, body_id)
 
-    def body_mass(self, body_id: int) -> float:
-        """Base mass of a body as PyBullet holds it (kg)."""
-        return float(p.getDynamicsInfo(body_id, -1, physicsClientId=self._client)[0])
+    def body_mass(self, body_id: int, link: int = -1) -> float:
+        """Mass of one link of a body as PyBullet holds it (kg; link -1 is the base)."""
+        return float(p.getDynamicsInfo(body_id, link, physicsClientId=self._client)[0])
 
     def set_body_mass(self, body_id: int, mass: float) -> None:
         """Change a body's base mass (0 makes it immovable by dynamics)."""

@@ -97,6 +97,11 @@ class FleetMotion:
         now = self._sim.sim_time + self._dt if self._sim.in_step else self._sim.sim_time
         self.actions.on_motion_end(agent, now, self._dt)
 
+    def wake_action(self, agent: Agent) -> None:
+        """Let the action ``agent`` waits on check its condition again (its joints moved)."""
+        now = self._sim.sim_time + self._dt if self._sim.in_step else self._sim.sim_time
+        self.actions.on_motion_end(agent, now, self._dt)
+
     def _on_motion_end(self, slot: int, reached: bool) -> None:
         agent = self._slot_agent.get(slot)
         if agent is not None:

@@ -5,10 +5,16 @@ of the target (facing it), drive in to ``pick_offset`` / ``drop_offset`` from it
 detach, and back out to the approach pose. A sub-move shorter than ``move_skip_threshold`` is
 skipped. Only what differs lives in the subclasses: which object is the target, and what
 "act" does.
+
+With ``joint_targets`` or ``ee_target_position`` the act is done by an arm: the joints reach
+(the given targets, or an IK solution for the end-effector target), the object is attached to
+or detached from ``attach_link``, and the joints return to where they were (the lift). An arm
+whose base cannot move reaches from where it stands, without the drive stages.
 """
 
 from __future__ import annotations
 
+import logging
 from collections import deque
 from dataclasses import dataclass, field
 from enum import Enum
@@ -32,6 +38,8 @@ if TYPE_CHECKING:
     from fleet_async.core.sim_object import SimObject
 
 __all__ = ["DropAction", "PickAction"]
+
+logger = logging.getLogger(__name__)
 
 # A stage: ("move", pose, phase, direction) or ("act", callable returning an error or None, phase)
 _Stage = tuple[Any, ...]
@@ -57,6 +65,14 @@ class _ApproachAction(Action):
     phase: Enum
     _stages: deque[_Stage] | None
     _moving: bool
+    _arm_targets: dict[int, float] | None
+    _arm_home: dict[int, float]
+    joint_tolerance: Any
+    joint_max_force: float
+    ee_target_orientation: Any
+    ee_end_effector_link: Any
+    ee_tolerance: float
+    continue_on_ik_failure: bool
 
     def _check_common(self) -> None:
         name = type(self).__name__
@@ -78,26 +94,82 @@ class _ApproachAction(Action):
 
     # shared sequence -----------------------------------------------------------------------
     def _plan(self, agent: Agent) -> deque[_Stage] | str:
-        if self.joint_targets is not None or self.ee_target_position is not None:
-            return "joint_targets / ee_target_* need arm support, which is not available yet"
+        uses_arm = self.joint_targets is not None or self.ee_target_position is not None
+        if uses_arm and agent.get_num_joints() == 0:
+            return f"joint_targets / ee_target_* need an agent with joints; {agent!r} has none"
         target = self._target_position(agent)
         if isinstance(target, str):
             return target
+        # An arm on a base that cannot move reaches from where it stands.
+        drives = not (uses_arm and agent.motion_blocker is not None)
         here = agent.get_pose().position
         offset = float(getattr(self, self._in_offset_field))
         inner = calculate_offset_pose(target, here, offset, keep_height=True)
         phases = self._phases
+        act_phase = phases[self._act_phase]
         stages: deque[_Stage] = deque()
-        if self.use_approach:
+        approach = None
+        if self.use_approach and drives:
             approach = self.approach_pose or calculate_offset_pose(
                 target, here, offset + float(self.approach_offset), keep_height=True
             )
             stages.append(("move", approach, phases["APPROACHING"], MovementDirection.FORWARD))
-        stages.append(("move", inner, phases[f"MOVING_TO_{self._verb}"], MovementDirection.FORWARD))
-        stages.append(("act", self._act, phases[self._act_phase]))
-        if self.use_approach:
+        if drives:
+            stages.append(
+                ("move", inner, phases[f"MOVING_TO_{self._verb}"], MovementDirection.FORWARD)
+            )
+        if uses_arm:
+            stages.append(("joints", self._reach_targets, act_phase))
+        stages.append(("act", self._act, act_phase))
+        if uses_arm:
+            stages.append(("joints", self._home_targets, act_phase))
+        if approach is not None:
             stages.append(("move", approach, phases["RETREATING"], MovementDirection.BACKWARD))
         return stages
+
+    def _reach_targets(self, agent: Agent) -> dict[int, float] | str:
+        """Joint targets for the reach: the given ones, or an IK solution for the EE target."""
+        self._arm_home = {j: float(agent.joints.positions[j]) for j in agent.joints.movable_indices}
+        if self.joint_targets is not None:
+            return agent.joint_targets_map(self.joint_targets)
+        solution = agent.ik_reach(
+            self.ee_target_position, self.ee_target_orientation, self.ee_end_effector_link
+        )
+        if solution.position_error > self.ee_tolerance:
+            message = (
+                f"end-effector target {list(self.ee_target_position)} is out of reach: the best "
+                f"solution stops {solution.position_error:.3f} m from it "
+                f"(ee_tolerance {self.ee_tolerance} m)"
+            )
+            if not self.continue_on_ik_failure:
+                return message
+            logger.warning(
+                "%r %s: %s; continuing (continue_on_ik_failure)",
+                agent,
+                type(self).__name__,
+                message,
+            )
+        return dict(solution.targets)
+
+    def _home_targets(self, agent: Agent) -> dict[int, float] | str:
+        """Lift: the joints go back to where they were before the reach."""
+        return dict(self._arm_home)
+
+    def _run_joint_stage(self, agent: Agent, stage: _Stage) -> bool | str:
+        """Command (first call) and wait for one joint stage; True once the joints arrived."""
+        if self._arm_targets is None:
+            targets = stage[1](agent)
+            if isinstance(targets, str):
+                return targets
+            try:
+                agent.set_joints_targets(targets, self.joint_max_force)
+            except (ValueError, TypeError) as exc:
+                return str(exc)
+            self._arm_targets = {j: float(agent.joints.targets[j]) for j in targets}
+        if not agent.are_joints_at_targets(self._arm_targets, self.joint_tolerance):
+            return False
+        self._arm_targets = None
+        return True
 
     def execute(self, agent: Agent, dt: float) -> bool:
         """Run stages until one has to wait for motion, or all are done."""
@@ -113,6 +185,14 @@ class _ApproachAction(Action):
                 error = stage[1](agent)
                 if error is not None:
                     return self.fail(error)
+                self._stages.popleft()
+                continue
+            if stage[0] == "joints":
+                arrived = self._run_joint_stage(agent, stage)
+                if isinstance(arrived, str):
+                    return self.fail(arrived)
+                if not arrived:
+                    return False
                 self._stages.popleft()
                 continue
             pose: Pose = stage[1]
@@ -139,8 +219,8 @@ class _ApproachAction(Action):
         return True
 
     def wait_hint(self) -> WaitHint:
-        """Waits for motion while a sub-move runs, else polls."""
-        return ("motion", None) if self._moving else ("poll", None)
+        """Waits for motion while a sub-move or the arm runs, else polls."""
+        return ("motion", None) if self._moving or self._arm_targets is not None else ("poll", None)
 
     def reset(self) -> None:
         """Forget progress."""
@@ -148,6 +228,8 @@ class _ApproachAction(Action):
         self.phase = self._phases["INIT"]
         self._stages = None
         self._moving = False
+        self._arm_targets = None
+        self._arm_home = {}
 
 
 def _resolve_body(agent: Agent, body_id: Any) -> SimObject | None:
@@ -199,6 +281,8 @@ class PickAction(_ApproachAction):
     picked_object: SimObject | None = field(default=None, init=False)
     _stages: deque[_Stage] | None = field(default=None, init=False, repr=False)
     _moving: bool = field(default=False, init=False, repr=False)
+    _arm_targets: dict[int, float] | None = field(default=None, init=False, repr=False)
+    _arm_home: dict[int, float] = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self._check_common()
@@ -306,6 +390,8 @@ class DropAction(_ApproachAction):
     dropped_object: SimObject | None = field(default=None, init=False)
     _stages: deque[_Stage] | None = field(default=None, init=False, repr=False)
     _moving: bool = field(default=False, init=False, repr=False)
+    _arm_targets: dict[int, float] | None = field(default=None, init=False, repr=False)
+    _arm_home: dict[int, float] = field(default_factory=dict, init=False, repr=False)
     _phases: ClassVar[type[Enum]] = DropPhase
     _in_offset_field: ClassVar[str] = "drop_offset"
     _verb: ClassVar[str] = "DROP"

@@ -32,6 +32,7 @@ from fleet_async.core.collision import CollisionSystem
 from fleet_async.core.config_utils import load_yaml_config
 from fleet_async.core.events import SimEvents
 from fleet_async.core.fleet import FleetMotion
+from fleet_async.core.joints import JointMotion
 from fleet_async.core.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.monitor import DataMonitor, SimulationMonitor
 from fleet_async.core.params import SimulationParams
@@ -93,7 +94,8 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
         self._managers: list[Any] = []
-        self._motion_systems: list[MotionSystem] = [self._fleet]
+        self._joint_motion = JointMotion(self._fleet.wake_action)
+        self._motion_systems: list[MotionSystem] = [self._fleet, self._joint_motion]
         self._step_count = 0
         self._collision_count = 0
         self._paused = False
@@ -171,6 +173,11 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         return self._fleet
 
     @property
+    def joint_motion(self) -> JointMotion:
+        """Moves URDF agents' joints towards their targets each step."""
+        return self._joint_motion
+
+    @property
     def world(self) -> World:
         """Objects, rows and attachments (what SimObject handles call back into)."""
         return self._world
@@ -225,9 +232,10 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         """Registered plugins, in registration order."""
         return list(self._plugins)
 
-    def body_mass(self, body_id: int) -> float:
-        """Base mass (kg) PyBullet holds for ``body_id``; 0.0 for no body (-1)."""
-        return self._backend.body_mass(body_id) if body_id >= 0 else 0.0
+    def body_mass(self, body_id: int, link: int = -1) -> float:
+        """Mass (kg) PyBullet holds for one link of ``body_id`` (-1: the base); 0.0 for no
+        body (-1)."""
+        return self._backend.body_mass(body_id, link) if body_id >= 0 else 0.0
 
     def get_object_by_id(self, object_id: int) -> SimObject | None:
         """The object with ``object_id``, or None."""
@@ -580,6 +588,7 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         generator is reseeded with ``seed``, or with ``params.seed``.
         """
         self._fleet.reset()  # first: unfinished actions end CANCELLED while agents are bound
+        self._joint_motion.reset()
         removed = self._world.clear()
         self._collision.reset()
         for manager in self._managers:

@@ -315,11 +315,15 @@ class World:
         else:
             p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=self._backend.client)
 
-    def link_pose(self, obj: SimObject, link_index: int) -> tuple[np.ndarray, np.ndarray]:
-        """World (position, orientation) of one link of ``obj``, from PyBullet's kinematics."""
+    def sync_object(self, obj: SimObject) -> None:
+        """Push ``obj``'s pose to PyBullet now if the store has a newer one."""
         row = obj.state_row
         if self._store.dirty[row]:
             self._backend.push_rows(self._store, np.array([row]))
+
+    def link_pose(self, obj: SimObject, link_index: int) -> tuple[np.ndarray, np.ndarray]:
+        """World (position, orientation) of one link of ``obj``, from PyBullet's kinematics."""
+        self.sync_object(obj)
         state = p.getLinkState(
             obj.body_id,
             link_index,
