@@ -14,10 +14,10 @@ from fleet_async.core.action import (
     WaitAction,
 )
 from fleet_async.core.agent import Agent
-from fleet_async.core.arm_actions import JointAction, PoseAction
 from fleet_async.core.agent_manager import AgentManager
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin
+from fleet_async.core.arm_actions import JointAction, PoseAction
 from fleet_async.core.config_utils import (
     dataclass_from_dict,
     forward_spawn_params,
@@ -60,6 +60,7 @@ from fleet_async.core.monitor import DataMonitor
 from fleet_async.core.params import SimulationParams
 from fleet_async.core.pick_drop import DropAction, PickAction
 from fleet_async.core.plugins import SimPlugin
+from fleet_async.core.recording import SimulationRecorder
 from fleet_async.core.shapes import ShapeParams
 from fleet_async.core.sim_object import SimObject
 from fleet_async.core.simulation import MultiRobotSimulationCore
@@ -115,9 +116,9 @@ __all__ = [
     "Path",
     "PatrolController",
     "PickAction",
-    "PoseAction",
     "PickPhase",
     "Pose",
+    "PoseAction",
     "PosePhase",
     "RandomWalkController",
     "ShapeParams",
@@ -127,6 +128,7 @@ __all__ = [
     "SimObjectSpawnParams",
     "SimPlugin",
     "SimulationParams",
+    "SimulationRecorder",
     "SpatialHashCellSizeMode",
     "WaitAction",
     "add_model_search_path",
