@@ -156,7 +156,7 @@ class PoseAction(Action):
         ):
             return True
         return self.fail(
-            f"end-effector target {list(self.target_position)} is unreachable: the best "
+            f"end-effector target {format_position(self.target_position)} is unreachable: the best "
             f"solution stops {off:.3f} m from it (tolerance {self.tolerance} m)"
         )
 
@@ -169,3 +169,8 @@ class PoseAction(Action):
         self._reset_status()
         self._started = False
         self.reachable = None
+
+
+def format_position(values: Any) -> str:
+    """[x, y, z] rounded to mm, for messages."""
+    return "[" + ", ".join(f"{float(v):.3f}" for v in values) + "]"

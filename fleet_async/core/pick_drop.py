@@ -29,6 +29,7 @@ from fleet_async.core.action import (
     Action,
     WaitHint,
 )
+from fleet_async.core.arm_actions import format_position
 from fleet_async.core.geometry import Pose
 from fleet_async.core.tools import calculate_offset_pose, find_nearest
 from fleet_async.core.types import DropPhase, MovementDirection, PickPhase
@@ -137,8 +138,8 @@ class _ApproachAction(Action):
         )
         if solution.position_error > self.ee_tolerance:
             message = (
-                f"end-effector target {list(self.ee_target_position)} is out of reach: the best "
-                f"solution stops {solution.position_error:.3f} m from it "
+                f"end-effector target {format_position(self.ee_target_position)} is out of "
+                f"reach: the best solution stops {solution.position_error:.3f} m from it "
                 f"(ee_tolerance {self.ee_tolerance} m)"
             )
             if not self.continue_on_ik_failure:
