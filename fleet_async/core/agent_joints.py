@@ -220,6 +220,11 @@ class AgentJointsApi:
         if targets:
             self._activate_joints()
 
+    def stop_joints(self) -> None:
+        """Hold every joint where it is now (no-op for agents without joints)."""
+        if self.get_num_joints():
+            self.joints.hold()
+
     def _activate_joints(self) -> None:
         if self.sim_core is not None:
             self.sim_core.joint_motion.activate(self, self.joints)  # type: ignore[arg-type]

@@ -79,6 +79,10 @@ class JointAction(Action):
         """Woken when the agent's joints move."""
         return ("motion", None)
 
+    def on_cancel(self, agent: Agent) -> None:
+        """Cancelled while running: the joints stop where they are."""
+        agent.stop_joints()
+
     def reset(self) -> None:
         """Forget progress."""
         self._reset_status()
@@ -163,6 +167,10 @@ class PoseAction(Action):
     def wait_hint(self) -> WaitHint:
         """Woken when the agent's joints move."""
         return ("motion", None)
+
+    def on_cancel(self, agent: Agent) -> None:
+        """Cancelled while running: the joints stop where they are."""
+        agent.stop_joints()
 
     def reset(self) -> None:
         """Forget progress."""

@@ -232,6 +232,24 @@ class JointSet:
             )
         self.moving = True
 
+    def hold(self) -> None:
+        """Stop every commanded joint where it is now (its target becomes its position)."""
+        self.refresh()
+        active = ~np.isnan(self.targets)
+        self.targets[active] = self.positions[active]
+        self.velocities[:] = 0.0
+        if not self.kinematic:
+            for j in np.flatnonzero(active):
+                p.setJointMotorControl2(
+                    self.body_id,
+                    int(j),
+                    p.POSITION_CONTROL,
+                    targetPosition=float(self.positions[j]),
+                    force=float(self.forces[j]),
+                    physicsClientId=self.client,
+                )
+        self.moving = False
+
     def set_positions(self, values: Mapping[int, float]) -> None:
         """Teleport joints (kinematic reset): positions written, velocities zeroed."""
         for j, value in values.items():

@@ -223,6 +223,11 @@ class _ApproachAction(Action):
         """Waits for motion while a sub-move or the arm runs, else polls."""
         return ("motion", None) if self._moving or self._arm_targets is not None else ("poll", None)
 
+    def on_cancel(self, agent: Agent) -> None:
+        """Cancelled while the arm was moving: the joints stop where they are."""
+        if self._arm_targets is not None:
+            agent.stop_joints()
+
     def reset(self) -> None:
         """Forget progress."""
         self._reset_status()
