@@ -78,6 +78,7 @@ from fleet_async.core.types import (
     PosePhase,
     SpatialHashCellSizeMode,
 )
+from fleet_async.core.world_loader import WorldLoadError, WorldLoadFailure
 
 __all__ = [
     "DEFAULT_EE_TOLERANCE",
@@ -131,6 +132,8 @@ __all__ = [
     "SimulationRecorder",
     "SpatialHashCellSizeMode",
     "WaitAction",
+    "WorldLoadError",
+    "WorldLoadFailure",
     "add_model_search_path",
     "create_controller",
     "dataclass_from_dict",

@@ -8,6 +8,7 @@ order is the order in which the managers fill them.
 
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
 from collections.abc import Mapping, Sequence
@@ -173,8 +174,10 @@ class GridSpawnParams:
             return dataclass_from_dict(cls, config, source=source, section="grid")
         unknown = [key for key in config if key not in _COUNT_KEYS]
         if unknown:
+            close = difflib.get_close_matches(str(unknown[0]), _COUNT_KEYS, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ValueError(
-                f"{where}grid: unknown key(s) {unknown} with 'count'; "
+                f"{where}grid: unknown key(s) {unknown} with 'count'{hint}; "
                 f"valid keys for a count-based grid: {list(_COUNT_KEYS)}"
             )
         try:

@@ -99,8 +99,10 @@ class SimObjectManager(Generic[T]):
         sim_core: The simulation; None until an object of a simulation is added.
         object_class: Class the spawn methods instantiate (SimObject or a subclass).
         enable_profiling: Log each spawn call's elapsed time at INFO.
+        name: Name under which ``sim_core.get_manager(name)`` finds this manager.
 
     Attributes:
+        name: The manager's name, or None.
         objects: Managed objects, in the order added.
         body_ids: ``objects[i].body_id``.
         object_ids: ``objects[i].object_id``.
@@ -110,13 +112,22 @@ class SimObjectManager(Generic[T]):
     """
 
     _managed_type: ClassVar[type[SimObject]] = SimObject
+    name: str | None = None
 
     def __init__(
         self,
         sim_core: MultiRobotSimulationCore | None = None,
         object_class: type[SimObject] = SimObject,
         enable_profiling: bool = False,
+        *,
+        name: str | None = None,
     ) -> None:
+        if name is not None:  # None keeps a name a subclass has already set
+            if not isinstance(name, str):
+                raise ValueError(
+                    f"{type(self).__name__}.name: expected a string or None, got {name!r}"
+                )
+            self.name = name
         if not (isinstance(object_class, type) and issubclass(object_class, self._managed_type)):
             raise TypeError(
                 f"{type(self).__name__}.object_class: expected a "
@@ -137,6 +148,11 @@ class SimObjectManager(Generic[T]):
 
     def _attach(self, sim: MultiRobotSimulationCore) -> None:
         """Join ``sim`` so its removals and resets reach this manager."""
+        other = None if self.name is None else sim.get_manager(self.name)
+        if other is not None and other is not self:
+            raise ValueError(
+                f"{type(self).__name__}.name: a manager named {self.name!r} is already registered"
+            )
         sim.register_manager(self)  # sets self.sim_core
 
     # ----- bookkeeping --------------------------------------------------------------------
@@ -309,6 +325,22 @@ class SimObjectManager(Generic[T]):
         """
         return self._spawn_entities(entities_yaml, "entities", source)
 
+    def spawn_entity(self, config: dict[str, Any], *, label: str = "entity") -> T:
+        """Spawn and track one entity from a config mapping, like one entry of
+        :meth:`spawn_from_config`.
+
+        Args:
+            config: The entity mapping; its ``type:`` (default "agent") picks the class.
+            label: Where the entry came from, prefixed to error messages (e.g.
+                ``"scenario.yaml: entities[2]"``).
+
+        Raises:
+            ValueError: for an unknown type, a type this manager cannot manage, or a bad entry,
+                prefixed with ``label``.
+        """
+        cls, prepared = self._plan_entity(config, label)
+        return self._spawn_each([self._entity_maker(label, cls, prepared)], "spawn_entity")[0]
+
     def spawn_from_yaml(self, yaml_path: str | FsPath, key: str = "entities") -> list[T]:
         """Spawn the entities listed under ``key`` in a YAML file (``[]`` if it has no ``key``).
 
@@ -403,24 +435,28 @@ class SimObjectManager(Generic[T]):
         plan: list[tuple[str, type[SimObject], dict[str, Any]]] = []
         for i, entry in enumerate(entries):
             label = f"{where}{key}[{i}]"
-            if not isinstance(entry, dict):
-                raise ValueError(f"{label}: expected a mapping, got {entry!r}")
-            config = dict(entry)
-            type_name = config.pop("type", "agent")
-            try:
-                cls = get_entity_class(type_name)
-            except ValueError as exc:
-                raise ValueError(f"{label}: {exc}") from None
-            if not issubclass(cls, self._managed_type):
-                raise ValueError(
-                    f"{label}: type {type_name!r} ({cls.__name__}) cannot join a "
-                    f"{type(self).__name__}, which manages {self._managed_type.__name__} objects"
-                )
-            plan.append((label, cls, self._prepare_config(cls, config)))
+            plan.append((label, *self._plan_entity(entry, label)))
         return self._spawn_each(
             (self._entity_maker(label, cls, config) for label, cls, config in plan),
             "spawn_from_config",
         )
+
+    def _plan_entity(self, entry: Any, label: str) -> tuple[type[SimObject], dict[str, Any]]:
+        """The class and prepared config for one entity mapping, checked before spawning."""
+        if not isinstance(entry, dict):
+            raise ValueError(f"{label}: expected a mapping, got {entry!r}")
+        config = dict(entry)
+        type_name = config.pop("type", "agent")
+        try:
+            cls = get_entity_class(type_name)
+        except ValueError as exc:
+            raise ValueError(f"{label}: {exc}") from None
+        if not issubclass(cls, self._managed_type):
+            raise ValueError(
+                f"{label}: type {type_name!r} ({cls.__name__}) cannot join a "
+                f"{type(self).__name__}, which manages {self._managed_type.__name__} objects"
+            )
+        return cls, self._prepare_config(cls, config)
 
     def _entity_maker(
         self, label: str, cls: type[SimObject], config: dict[str, Any]

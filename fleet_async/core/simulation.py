@@ -29,7 +29,6 @@ from fleet_async.core import gui
 from fleet_async.core.attachments import AttachmentSet
 from fleet_async.core.backend import PyBulletBackend
 from fleet_async.core.collision import CollisionSystem
-from fleet_async.core.config_utils import load_yaml_config
 from fleet_async.core.events import SimEvents
 from fleet_async.core.fleet import FleetMotion
 from fleet_async.core.joints import JointMotion
@@ -114,36 +113,6 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
             ("collision_check", self._phase_collision),
             ("events_post_step", self._phase_post_step),
         )
-
-    # ----- construction from config -------------------------------------------------------
-
-    @classmethod
-    def from_dict(
-        cls, config: dict[str, Any], *, source: str | None = None
-    ) -> MultiRobotSimulationCore:
-        """Create a simulation from a config mapping (flat params, or a ``simulation:`` section).
-
-        Raises:
-            ValueError: for unknown sections or keys, naming them and ``source``.
-        """
-        where = f"{source}: " if source else ""
-        if not isinstance(config, dict):
-            raise ValueError(f"{where}expected a mapping at the top level, got {config!r}")
-        if "simulation" in config:
-            unknown = sorted(set(config) - {"simulation"})
-            if unknown:
-                raise ValueError(
-                    f"{where}unsupported top-level section(s) {unknown}; supported: ['simulation']"
-                )
-            section = config["simulation"] or {}
-        else:
-            section = config
-        return cls(SimulationParams.from_dict(section, source=source))
-
-    @classmethod
-    def from_yaml(cls, yaml_path: str = "config.yaml") -> MultiRobotSimulationCore:
-        """Create a simulation from a YAML file (see :meth:`from_dict`)."""
-        return cls.from_dict(load_yaml_config(yaml_path), source=str(yaml_path))
 
     # ----- read-only state ----------------------------------------------------------------
 

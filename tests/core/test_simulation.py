@@ -351,8 +351,8 @@ def test_from_dict_and_from_yaml(tmp_path):
         assert core.params.timestep == 0.5
     finally:
         core.close()
-    with pytest.raises(ValueError, match="entities"):
-        MultiRobotSimulationCore.from_dict({"simulation": {"gui": False}, "entities": []})
+    with pytest.raises(ValueError, match="unknown key 'entites'"):
+        MultiRobotSimulationCore.from_dict({"simulation": {"gui": False}, "entites": []})
 
 
 def test_time_profiling_logs_a_summary_every_interval(caplog):
