@@ -3,17 +3,21 @@
 Run:  python examples/warehouse_missions.py [--robots 6] [--orders 12] [--backend asyncio|trio]
                                             [--max-steps N] [--gui]
 
-A dispatcher coroutine starts one mission per robot. Each robot takes the next order from the
-shared order list, picks the tote at the shelf, drives to the station lane, drops the tote at
-its station and comes back for more; a supervisor mission reports progress every 20 s of sim
-time. Everything happens in sim time: the step loop advances only when every mission is
-waiting, so the run is deterministic and much faster than real time.
+The warehouse is the scenario file examples/scenarios/warehouse.yaml: shelf racks and packing
+stations from a Gazebo world, a picker fleet from a grid entry, a patrol squad and a restocking
+run of its own. On top of it, a dispatcher coroutine starts one mission per picker. Each picker
+takes the next order from the shared order list, picks the tote at the shelf, drives to its
+station through a cross aisle, drops the tote there and comes back for more; a supervisor
+mission reports progress every 20 s of sim time. Everything happens in sim time: the step loop
+advances only when every mission is waiting, so the run is deterministic and much faster than
+real time.
 """
 
 from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from pathlib import Path
 
 import fleet_async as fa
 from fleet_async import (
@@ -21,13 +25,15 @@ from fleet_async import (
     Agent,
     MultiRobotSimulationCore,
     Pose,
-    ShapeParams,
     SimObject,
-    SimulationParams,
+    load_yaml_config,
 )
 
-TOTE = ShapeParams("box", half_extents=[0.15, 0.15, 0.08], rgba_color=[0.9, 0.5, 0.1, 1])
-ROBOT = ShapeParams("box", half_extents=[0.3, 0.25, 0.1], rgba_color=[0.2, 0.4, 0.9, 1])
+SCENARIO = Path(__file__).resolve().parent / "scenarios" / "warehouse.yaml"
+CROSS_AISLES = (1.0, 7.0, 13.0, 19.0)  # x of the free lanes between shelf racks
+PICK_LANE = 2.0  # y of the aisle in front of shelf row A
+STATION_LANE = 15.0  # y of the lane in front of the station tables
+STATIONS = (5.0, 15.0)  # x of the station tables (at y = 17)
 
 
 @dataclass
@@ -40,41 +46,34 @@ class Order:
 
 
 def build(
-    sim: MultiRobotSimulationCore, robots: int, orders: int
-) -> tuple[list[Agent], list[Order]]:
-    """Shelves along y = 8, totes in front of them, robots at the dock, stations at y = -6."""
-    for i in range(3):
-        shelf = SimObject.from_sdf(
-            "kiva_shelf/model.sdf", sim_core=sim, collision_mode="static", name_prefix=f"shelf{i}"
-        )[0]
-        shelf.set_pose(Pose.from_xyz(-6.0 + 6.0 * i, 9.5, 0.0))
-    totes = [
-        SimObject.from_mesh(
-            TOTE,
-            TOTE,
-            Pose.from_xyz(-8.0 + 16.0 * k / max(orders - 1, 1), 8.0, 0.08),
-            sim_core=sim,
-            name=f"tote{k}",
-        )
-        for k in range(orders)
-    ]
-    fleet = [
-        Agent.from_mesh(
-            ROBOT,
-            ROBOT,
-            Pose.from_xyz(-5.0 + 2.0 * i, 0.0, 0.1),
-            sim_core=sim,
-            name=f"robot{i}",
-            controller={"type": "differential", "max_linear_vel": 1.5, "max_linear_accel": 1.0},
-        )
-        for i in range(robots)
-    ]
-    return fleet, [Order(k, tote, k % 4) for k, tote in enumerate(totes)]
+    gui: bool, robots: int, orders: int
+) -> tuple[MultiRobotSimulationCore, list[Agent], list[Order]]:
+    """Load the warehouse scenario; name its pickers and totes; make the order list."""
+    config = load_yaml_config(SCENARIO)
+    config["simulation"].update(gui=gui, target_rtf=1.0 if gui else 0.0)
+    sim = MultiRobotSimulationCore.from_dict(config, source=str(SCENARIO), base_dir=SCENARIO.parent)
+    fleet = sim.get_manager("pickers").objects[:robots]
+    for i, robot in enumerate(fleet):
+        robot.name = f"picker{i}"
+    totes = [o for o in sim.sim_objects if o.name == "tote"][:orders]
+    for k, tote in enumerate(totes):
+        tote.name = f"tote{k}"
+    return sim, fleet, [Order(k, tote, k % len(STATIONS)) for k, tote in enumerate(totes)]
 
 
 def station_pose(station: int, slot: int) -> Pose:
-    """Where a tote goes at a station (slots stack side by side)."""
-    return Pose.from_xyz(-4.5 + 3.0 * station + 0.4 * (slot % 3), -6.0 - 0.4 * (slot // 3), 0.08)
+    """Where a tote goes at a station: side by side on the floor in front of the table."""
+    return Pose.from_xyz(STATIONS[station] - 0.6 + 0.4 * (slot % 4), 16.2 - 0.4 * (slot // 4), 0.08)
+
+
+def via_cross_aisle(robot: Agent, y_to: float, x_to: float | None = None) -> list[Pose]:
+    """A path to lane ``y_to`` through the nearest cross aisle (never through a rack)."""
+    here = robot.get_pose()
+    xc = min(CROSS_AISLES, key=lambda x: abs(x - here.x))
+    path = [Pose.from_xyz(xc, here.y, 0.1), Pose.from_xyz(xc, y_to, 0.1)]
+    if x_to is not None:
+        path.append(Pose.from_xyz(x_to, y_to, 0.1))
+    return path
 
 
 async def run_shift(
@@ -82,7 +81,7 @@ async def run_shift(
 ) -> dict[str, int]:
     """The dispatcher: one mission per robot, plus a supervisor; returns the tally."""
     backlog = list(orders)
-    filled = [0, 0, 0, 0]
+    filled = [0] * len(STATIONS)
     tally = {"delivered": 0, "failed": 0}
 
     def say(message: str) -> None:
@@ -93,11 +92,16 @@ async def run_shift(
         while backlog:
             order = backlog.pop(0)  # missions run one at a time between steps: no lock needed
             try:
+                if robot.get_pose().y > PICK_LANE + 1.0:  # at the stations: back to the racks
+                    await robot.move(via_cross_aisle(robot, PICK_LANE))
                 await robot.pick(
-                    order.tote, approach_offset=1.0, attach_relative_pose=Pose.from_xyz(0, 0, 0.2)
+                    order.tote,
+                    approach_offset=1.0,
+                    pick_offset=0.4,
+                    attach_relative_pose=Pose.from_xyz(0, 0, 0.2),
                 )
                 say(f"{robot.name} picked {order.tote.name} (order {order.number})")
-                await robot.move(Pose.from_xyz(-4.5 + 3.0 * order.station, -3.0, 0.1))
+                await robot.move(via_cross_aisle(robot, STATION_LANE, STATIONS[order.station]))
                 slot = filled[order.station]
                 filled[order.station] += 1
                 await robot.drop(station_pose(order.station, slot), approach_offset=0.8)
@@ -106,7 +110,7 @@ async def run_shift(
             except ActionFailedError as exc:
                 tally["failed"] += 1
                 say(f"{robot.name} gave up on order {order.number}: {exc.action.error_message}")
-        await robot.move(home)
+        await robot.move([*via_cross_aisle(robot, PICK_LANE), home])
         say(f"{robot.name} is back at the dock")
 
     async def supervisor() -> None:
@@ -123,8 +127,8 @@ async def run_shift(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robots", type=int, default=6)
-    parser.add_argument("--orders", type=int, default=12)
+    parser.add_argument("--robots", type=int, default=6, choices=range(1, 7), metavar="1..6")
+    parser.add_argument("--orders", type=int, default=12, choices=range(1, 13), metavar="1..12")
     parser.add_argument("--backend", choices=["asyncio", "trio"], default="asyncio")
     parser.add_argument("--max-steps", type=int, default=6000, help="stop after this many steps")
     parser.add_argument(
@@ -132,11 +136,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
 
-    params = SimulationParams(
-        gui=args.gui, target_rtf=1.0 if args.gui else 0.0, monitor=False, timestep=0.1
-    )
-    with MultiRobotSimulationCore(params) as sim:
-        fleet, orders = build(sim, args.robots, args.orders)
+    sim, fleet, orders = build(args.gui, args.robots, args.orders)
+    with sim:
         tally = fa.run(
             sim,
             run_shift,
@@ -144,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
             fleet,
             orders,
             backend=args.backend,
-            until=args.max_steps * params.timestep,
+            until=args.max_steps * sim.params.timestep,
         )
         if tally is None:
             print(f"stopped at the step limit ({args.max_steps} steps) before the shift ended")

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import tempfile
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -24,7 +25,7 @@ from fleet_async.core.params import SimulationParams
 from fleet_async.core.shapes import clear_shape_cache, forget_body_shape
 from fleet_async.core.state import KinematicState
 
-__all__ = ["PyBulletBackend", "display_available"]
+__all__ = ["PyBulletBackend", "display_available", "native_output_logged"]
 
 logger = logging.getLogger(__name__)
 
@@ -40,6 +41,36 @@ def display_available() -> bool:
     if sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
         return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     return True
+
+
+@contextmanager
+def native_output_logged(log: logging.Logger) -> Iterator[None]:
+    """Route what PyBullet's C++ code prints (b3Warning lines from its importers) to ``log`` at
+    DEBUG instead of the terminal, for the duration of the block.
+
+    Python's own output is flushed first and keeps its place; nothing is lost, only moved.
+    """
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = (os.dup(1), os.dup(2))
+    except (OSError, ValueError):  # no real stdout / stderr file descriptors: leave them be
+        yield
+        return
+    with tempfile.TemporaryFile() as sink:
+        try:
+            os.dup2(sink.fileno(), 1)
+            os.dup2(sink.fileno(), 2)
+            yield
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+            sink.seek(0)
+            text = sink.read().decode("utf-8", errors="replace").strip()
+            if text:
+                log.debug("PyBullet printed: %s", text)
 
 
 class PyBulletBackend:

@@ -170,8 +170,14 @@ def _body_info(body_id: int, client: int) -> tuple[int, str]:
     count = p.getNumJoints(body_id, physicsClientId=client)  # raises if not connected
     try:
         info = p.getBodyInfo(body_id, physicsClientId=client)
-    except p.error as exc:
-        raise ValueError(f"No body with id {body_id} in physics client {client}") from exc
+    except p.error:
+        # Bodies made by one createMultiBody(batchPositions=...) call exist on PyBullet's
+        # server, but its client-side cache only learns of the last one; refresh it once.
+        p.syncBodyInfo(physicsClientId=client)
+        try:
+            info = p.getBodyInfo(body_id, physicsClientId=client)
+        except p.error as exc:
+            raise ValueError(f"No body with id {body_id} in physics client {client}") from exc
     return count, info[0].decode("utf-8")
 
 

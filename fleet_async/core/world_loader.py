@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, cast
 import pybullet as p
 import pybullet_data
 
+from fleet_async.core.backend import native_output_logged
 from fleet_async.core.gazebo_world import (
     AssetProblem,
     ModelSearch,
@@ -291,7 +292,8 @@ class BodyLoader:
             return []
         path = self.rewriter.write(root, name) if changed or force_copy else sdf_file
         try:
-            bodies = [int(b) for b in p.loadSDF(str(path), physicsClientId=self.client)]
+            with native_output_logged(logger):
+                bodies = [int(b) for b in p.loadSDF(str(path), physicsClientId=self.client)]
         except p.error as exc:
             paths = dict.fromkeys([sdf_file, path])
             self.fail(name, AssetProblem(f"PyBullet could not load the SDF ({exc})", paths))

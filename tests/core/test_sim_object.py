@@ -439,3 +439,19 @@ def test_pybullet_data_path_is_searched(sim):
     assert pybullet_data.getDataPath()
     obj = SimObject.from_mesh(visual_shape=ShapeParams("mesh", mesh_path="duck.obj"), sim_core=sim)
     assert obj.body_id >= 0
+
+
+def test_batch_spawned_bodies_can_be_picked_up_and_carry(sim):
+    # One createMultiBody(batchPositions=...) call makes every body, but PyBullet's client
+    # cache only knows the last one until it is refreshed; attach must work on all of them.
+    params = [
+        SimObjectSpawnParams(visual_shape=BOX, collision_shape=BOX, initial_pose=Pose([i, 0, 0.1]))
+        for i in range(4)
+    ]
+    objs = SimObject.spawn_batch(params, sim)
+    carrier = box(sim, 0.0, 3.0, 0.1)
+    for k, obj in enumerate(objs):
+        carrier.attach_object(obj, relative_pose=Pose([0, 0, 0.2 * (k + 1)]))
+        obj.attach_object(box(sim, 10.0 + k, 0.0, 0.1), relative_pose=Pose([0, 0, 0.2]))
+    got = np.array([o.get_pose().position for o in objs])
+    assert np.allclose(got, [[0, 3, 0.3], [0, 3, 0.5], [0, 3, 0.7], [0, 3, 0.9]])
