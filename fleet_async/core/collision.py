@@ -81,6 +81,9 @@ class CollisionSystem:
         self._mode = np.zeros(0, dtype=np.int8)  # collision code at registration
         self._articulated = np.zeros(0, dtype=bool)
         self._shape = np.zeros(0, dtype=np.int64)  # single collision shape id, or -1
+        self._box = np.zeros(0, dtype=bool)  # the body is one box shape, unrotated in its frame
+        self._box_center = np.zeros((0, 3))  # that box's center in the body frame
+        self._box_half = np.zeros((0, 3))  # and its half extents
         self._active: set[tuple[int, int]] = set()
         self._colors: dict[int, list[Any]] = {}
         self._next_due_step = 0
@@ -133,6 +136,9 @@ class CollisionSystem:
             ("_mode", 0, np.int8, 0),
             ("_articulated", 0, bool, False),
             ("_shape", 0, np.int64, -1),
+            ("_box", 0, bool, False),
+            ("_box_center", 3, float, 0.0),
+            ("_box_half", 3, float, 0.0),
         ):
             old = getattr(self, name)
             new = np.full((cap, width) if width else cap, fill, dtype=dtype)
@@ -151,6 +157,9 @@ class CollisionSystem:
             n_links = p.getNumJoints(body, physicsClientId=client) if body >= 0 else 0
             self._articulated[row] = n_links > 0
             self._shape[row] = body_collision_shape(client, body) if n_links == 0 else -1
+            self._box[row] = False
+            if body >= 0 and n_links == 0:
+                self._read_box(row, body, client)
             lo, hi = self._body_aabb(body, n_links, client) if body >= 0 else (pos, pos)
             identity = np.array_equal(orn, [0.0, 0.0, 0.0, 1.0])
             if not identity and body >= 0 and n_links == 0:
@@ -169,6 +178,17 @@ class CollisionSystem:
             self._mode[row] = store.collision_mode[row]
             self.registrations += 1
         self._refresh(rows, force=True)
+
+    def _read_box(self, row: int, body: int, client: int) -> None:
+        """Record the body's box if it is exactly one box shape with no rotation in its frame."""
+        data = p.getCollisionShapeData(body, -1, physicsClientId=client)
+        if len(data) != 1 or data[0][2] != p.GEOM_BOX:
+            return
+        if not np.array_equal(data[0][6], [0.0, 0.0, 0.0, 1.0]):
+            return
+        self._box[row] = True
+        self._box_center[row] = data[0][5]
+        self._box_half[row] = np.asarray(data[0][3], dtype=float) / 2
 
     @staticmethod
     def _body_aabb(body: int, n_links: int, client: int) -> tuple[np.ndarray, np.ndarray]:
@@ -299,9 +319,10 @@ class CollisionSystem:
     def _touching(self, row_pairs: np.ndarray) -> list[bool]:
         """Narrow phase for candidate row pairs.
 
-        Distance queries on two bodies that are each one known collision shape go to PyBullet
-        as (shape, pose from the store), so those rows are never pushed just for the query;
-        other pairs push their own rows first.
+        Two single-box bodies at identity orientation (the common case for box robots, totes
+        and pallets) get their exact distance in one numpy pass. Other distance queries on two
+        bodies that are each one known collision shape go to PyBullet as (shape, pose from the
+        store), so those rows are never pushed just for the query; the rest push their rows.
         """
         store, client = self._sim.state, self._sim.client
         if not len(row_pairs):
@@ -313,19 +334,25 @@ class CollisionSystem:
             contact = ~kinematic.any(axis=1)
         else:
             contact = np.zeros(len(row_pairs), dtype=bool)
+        exact = ~contact & self._unrotated_boxes(row_pairs)
+        out = np.zeros(len(row_pairs), dtype=bool)
+        if exact.any():
+            out[exact] = self._box_distance(row_pairs[exact]) <= self.margin
+            if exact.all():
+                return out.tolist()
         shapes = self._shape[row_pairs]
-        by_shape = ~contact & (shapes >= 0).all(axis=1)
-        needs_body = row_pairs[~by_shape]
+        by_shape = ~contact & ~exact & (shapes >= 0).all(axis=1)
+        needs_body = row_pairs[~by_shape & ~exact]
         if len(needs_body):
             self._sync_rows(np.unique(needs_body))
         bodies = store.body_id[row_pairs].tolist()
         pos = store.position[row_pairs].tolist()
         orn = store.orientation[row_pairs].tolist()
-        out = []
         margin = self.margin
-        for k, (a, b) in enumerate(bodies):
+        for k in np.flatnonzero(~exact).tolist():
+            a, b = bodies[k]
             if contact[k]:
-                out.append(len(p.getContactPoints(a, b, physicsClientId=client)) > 0)
+                out[k] = len(p.getContactPoints(a, b, physicsClientId=client)) > 0
             elif by_shape[k]:
                 hits = p.getClosestPoints(
                     -1,
@@ -339,10 +366,32 @@ class CollisionSystem:
                     collisionShapeOrientationB=orn[k][1],
                     physicsClientId=client,
                 )
-                out.append(len(hits) > 0)
+                out[k] = len(hits) > 0
             else:
-                out.append(len(p.getClosestPoints(a, b, margin, physicsClientId=client)) > 0)
-        return out
+                out[k] = len(p.getClosestPoints(a, b, margin, physicsClientId=client)) > 0
+        return out.tolist()
+
+    def _unrotated_boxes(self, row_pairs: np.ndarray) -> np.ndarray:
+        """Pairs whose two bodies are single boxes at identity orientation (exact distance)."""
+        both = self._box[row_pairs].all(axis=1)
+        if not both.any():
+            return both
+        orn = self._sim.state.orientation[row_pairs]  # (K, 2, 4)
+        identity = (orn[:, :, 3] == 1.0).all(axis=1) & ~orn[:, :, :3].any(axis=(1, 2))
+        return both & identity
+
+    def _box_distance(self, row_pairs: np.ndarray) -> np.ndarray:
+        """Exact distance (m) between two axis-aligned boxes per pair (0 when they overlap).
+
+        Matches PyBullet's closest-points distance for unrotated box shapes, without a call
+        per pair.
+        """
+        store = self._sim.state
+        a, b = row_pairs[:, 0], row_pairs[:, 1]
+        ca = store.position[a] + self._box_center[a]
+        cb = store.position[b] + self._box_center[b]
+        gap = np.abs(ca - cb) - self._box_half[a] - self._box_half[b]
+        return np.sqrt((np.maximum(gap, 0.0) ** 2).sum(axis=1))
 
     def check(
         self, ignore_static: bool | None = None, collision_color: list[float] | None = None
