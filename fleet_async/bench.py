@@ -1,0 +1,237 @@
+"""Fleet-scale benchmark: step time, real-time factor, spawn time and memory per agent.
+
+Memory is reported two ways: the Python heap that spawning adds (tracemalloc, measured in a
+separate spawn so tracing does not slow the timed run) and the process RSS growth during the
+timed spawn (which includes PyBullet's own per-body memory).
+
+Workload (the same for every N): N box robots (0.1 m cube, kinematic) on a ceil(sqrt(N)) grid
+with 1 m spacing at z = 0.1; half of them, chosen with a fixed seed, get one goal uniform in
+(-10, g + 10) on x and y (g = grid side in m); omni controller with max_linear_vel 2.0 and
+max_angular_vel 3.0; timestep 0.1 s; collision checks every step (NORMAL_3D, closest points,
+margin 0.02 m); 10 warm-up steps, then 100 timed step_once() calls.
+
+Run:  fleet-async bench [--n 100 1000 10000] [--large] [--json] [--profile]
+ or:  python benchmarks/fleet_bench.py (the same flags)
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import math
+import sys
+import time
+import tracemalloc
+from typing import Any, TextIO
+
+import numpy as np
+
+from fleet_async.core.agent import Agent
+from fleet_async.core.agent_params import AgentSpawnParams
+from fleet_async.core.geometry import Pose
+from fleet_async.core.params import SimulationParams
+from fleet_async.core.shapes import ShapeParams
+from fleet_async.core.simulation import MultiRobotSimulationCore
+from fleet_async.core.types import CollisionDetectionMethod
+
+__all__ = [
+    "DEFAULT_SIZES",
+    "LARGE_SIZE",
+    "TIMED_STEPS",
+    "TIMESTEP",
+    "WARMUP_STEPS",
+    "add_arguments",
+    "bench_params",
+    "format_result",
+    "main",
+    "python_heap_per_agent",
+    "run",
+    "run_from_args",
+    "spawn_fleet",
+]
+
+WARMUP_STEPS = 10
+TIMED_STEPS = 100
+TIMESTEP = 0.1
+"""Sim seconds per step of the workload."""
+DEFAULT_SIZES = (100, 1000, 10000)
+LARGE_SIZE = 50000
+"""The fleet size ``--large`` adds."""
+SEED = 42
+"""Seed of the generator that picks the movers and their goals."""
+
+
+def spawn_fleet(sim: MultiRobotSimulationCore, n: int) -> list[Agent]:
+    """Spawn N box agents on a square grid, 1 m apart, at z = 0.1 m (world frame)."""
+    side = math.ceil(math.sqrt(n))
+    cube = ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
+    controller = {"type": "omni", "max_linear_vel": 2.0, "max_angular_vel": 3.0}
+    params = [
+        AgentSpawnParams(
+            visual_shape=cube,
+            collision_shape=cube,
+            initial_pose=Pose.from_xyz(float(i % side), float(i // side), 0.1),
+            mass=0.0,
+            controller=controller,
+        )
+        for i in range(n)
+    ]
+    return Agent.spawn_batch(params, sim)
+
+
+def _rss_bytes() -> int:
+    """Resident set size of this process in bytes (Linux /proc; 0 elsewhere)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * 4096
+    except OSError:
+        return 0
+
+
+def bench_params() -> SimulationParams:
+    """The workload's simulation settings: headless, unpaced, dt = 0.1 s, no floor."""
+    return SimulationParams(
+        gui=False,
+        monitor=False,
+        target_rtf=0.0,
+        timestep=TIMESTEP,
+        collision_detection_method=CollisionDetectionMethod.CLOSEST_POINTS,
+        collision_margin=0.02,
+        collision_check_frequency=None,
+        enable_floor=False,
+    )
+
+
+def python_heap_per_agent(n: int) -> float:
+    """KB of Python heap (tracemalloc) that spawning N agents adds, per agent."""
+    gc.collect()
+    with MultiRobotSimulationCore(bench_params()) as sim:
+        tracemalloc.start()
+        base = tracemalloc.get_traced_memory()[0]
+        agents = spawn_fleet(sim, n)
+        used = tracemalloc.get_traced_memory()[0] - base
+        tracemalloc.stop()
+        del agents
+    return used / 1024.0 / n
+
+
+def _set_goals(agents: list[Agent], n: int) -> None:
+    """Give half the agents (chosen with :data:`SEED`) one goal each."""
+    rng = np.random.default_rng(SEED)
+    side = math.ceil(math.sqrt(n))
+    movers = rng.choice(n, size=n // 2, replace=False)
+    goals = rng.uniform(-10.0, side + 10.0, size=(len(movers), 2))
+    for idx, (gx, gy) in zip(movers.tolist(), goals.tolist(), strict=True):
+        agents[idx].set_goal_pose(Pose.from_xyz(gx, gy, 0.1))
+
+
+def run(n: int, profile: bool = False) -> dict[str, Any]:
+    """Run the workload for N agents.
+
+    Args:
+        n: Fleet size.
+        profile: Also return ``phases_ms``: mean ms per timed step of each step phase.
+
+    Returns:
+        ``n``, ``step_ms`` (mean wall ms per timed step), ``real_time_factor``, ``spawn_s``
+        (wall seconds), ``python_heap_kb_per_agent``, ``rss_kb_per_agent``, ``moving_after``
+        (agents still moving after the timed steps), ``collisions`` and, with ``profile``,
+        ``phases_ms``.
+    """
+    gc.collect()
+    with MultiRobotSimulationCore(bench_params()) as sim:
+        rss0 = _rss_bytes()
+        t0 = time.perf_counter()
+        agents = spawn_fleet(sim, n)
+        spawn_s = time.perf_counter() - t0
+        rss_bytes = _rss_bytes() - rss0
+        _set_goals(agents, n)
+        for _ in range(WARMUP_STEPS):
+            sim.step_once()
+        phases: dict[str, float] = {}
+        t0 = time.perf_counter()
+        for _ in range(TIMED_STEPS):
+            timings = sim.step_once(return_profiling=profile)
+            for key, value in (timings or {}).items():
+                phases[key] = phases.get(key, 0.0) + value / TIMED_STEPS
+        step_ms = (time.perf_counter() - t0) * 1000.0 / TIMED_STEPS
+        moving = sum(a.is_moving for a in agents)
+        collisions = sim.collision_count
+    result: dict[str, Any] = {
+        "n": n,
+        "step_ms": step_ms,
+        "real_time_factor": TIMESTEP * 1000.0 / step_ms,
+        "spawn_s": spawn_s,
+        "python_heap_kb_per_agent": python_heap_per_agent(n),
+        "rss_kb_per_agent": rss_bytes / 1024.0 / n,
+        "moving_after": moving,
+        "collisions": collisions,
+    }
+    if profile:
+        result["phases_ms"] = phases
+    return result
+
+
+def format_result(result: dict[str, Any]) -> str:
+    """The human-readable report of one :func:`run` result (lines joined by newlines)."""
+    lines = [
+        f"N={result['n']:>6}: step {result['step_ms']:8.3f} ms  "
+        f"RTF {result['real_time_factor']:8.1f}x  spawn {result['spawn_s']:6.3f} s  "
+        f"heap {result['python_heap_kb_per_agent']:5.2f} KB/agent  "
+        f"RSS {result['rss_kb_per_agent']:5.2f} KB/agent  collisions {result['collisions']}"
+    ]
+    phases = result.get("phases_ms")
+    if phases is not None:
+        for key, value in sorted(phases.items(), key=lambda kv: -kv[1]):
+            lines.append(f"    {key:<20} {value:8.3f} ms")
+    return "\n".join(lines)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the benchmark's options (``--n``, ``--large``, ``--json``, ``--profile``)."""
+    parser.add_argument(
+        "--n",
+        type=int,
+        nargs="+",
+        default=list(DEFAULT_SIZES),
+        metavar="N",
+        help="fleet sizes (agents) to run, in order (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--large", action="store_true", help=f"also run {LARGE_SIZE:,} agents (after --n)"
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object per size (keys: n, step_ms, real_time_factor, spawn_s, "
+        "python_heap_kb_per_agent, rss_kb_per_agent, moving_after, collisions)",
+    )
+    parser.add_argument(
+        "--profile", action="store_true", help="add a per-phase breakdown (ms/step)"
+    )
+
+
+def run_from_args(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Run every requested size and print its report; return the exit code (0)."""
+    stream = out if out is not None else sys.stdout
+    sizes = [*args.n, *([LARGE_SIZE] if args.large else [])]
+    for n in sizes:
+        if n <= 0:
+            raise ValueError(f"--n: fleet sizes must be > 0, got {n}")
+    for n in sizes:
+        result = run(n, profile=args.profile)
+        print(json.dumps(result) if args.json else format_result(result), file=stream)
+        stream.flush()
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry of ``benchmarks/fleet_bench.py``."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    add_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        return run_from_args(args)
+    except ValueError as exc:
+        parser.error(str(exc))  # exits with code 2

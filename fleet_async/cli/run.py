@@ -1,0 +1,385 @@
+"""``fleet-async run SCENARIO.yaml``: build a scenario, step it, print what happened.
+
+The scenario is loaded exactly as ``MultiRobotSimulationCore.from_yaml`` loads it, with two
+settings decided by the command line instead of the file: ``gui`` (off unless ``--gui``) and,
+when the scenario does not set ``target_rtf``, no real-time pacing (the library default of 1.0
+is meant for interactive use; a command-line run goes as fast as it can).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from fleet_async.cli.errors import CliError
+from fleet_async.cli.progress import ProgressBar
+from fleet_async.core import gui
+from fleet_async.core.config_utils import load_yaml_config
+from fleet_async.core.events import SimEvents
+from fleet_async.core.runner import RealTimePacer
+from fleet_async.core.scenario import SCENARIO_SECTIONS
+from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = [
+    "ActionTally",
+    "RunSummary",
+    "add_arguments",
+    "execute",
+    "format_summary",
+    "load_scenario",
+    "run_steps",
+    "steps_for",
+]
+
+INTERRUPTED_EXIT_CODE = 130
+"""Exit code after Ctrl+C (128 + SIGINT), as shells report it."""
+
+
+# ----- arguments ------------------------------------------------------------------------------
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def _non_negative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def _frame_size(text: str) -> tuple[int, int]:
+    width, sep, height = text.lower().partition("x")
+    if not (sep and width.isdigit() and height.isdigit() and int(width) > 0 and int(height) > 0):
+        raise argparse.ArgumentTypeError(
+            f"expected WIDTHxHEIGHT in pixels (e.g. 640x480), got {text!r}"
+        )
+    return int(width), int(height)
+
+
+def _positive_int(text: str) -> int:
+    if not text.isdigit() or int(text) <= 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number > 0, got {text!r}")
+    return int(text)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the ``run`` options to ``parser``."""
+    parser.add_argument("scenario", metavar="SCENARIO.yaml", help="the scenario file to run")
+    parser.add_argument(
+        "--duration",
+        type=_positive_float,
+        metavar="S",
+        help="sim seconds to run (default: the scenario's simulation.duration; required when "
+        "that is not set or <= 0); the run takes the fewest whole steps covering it",
+    )
+    parser.add_argument(
+        "--gui",
+        action="store_true",
+        help="open the PyBullet window (and the monitor window if the scenario enables "
+        "'monitor'); SPACE pauses. Without it the run is headless whatever the scenario says",
+    )
+    parser.add_argument(
+        "--rtf",
+        type=_non_negative_float,
+        metavar="X",
+        help="pace the run at X sim seconds per wall second, 0 for as fast as possible "
+        "(default: the scenario's target_rtf if it sets one, else as fast as possible)",
+    )
+    parser.add_argument(
+        "--record",
+        metavar="OUT",
+        help="record the run to OUT: .gif (needs Pillow) or .mp4 (needs imageio with PyAV); "
+        'install both with: pip install "fleet-async[record]"',
+    )
+    parser.add_argument(
+        "--record-size",
+        type=_frame_size,
+        default=(800, 600),
+        metavar="WxH",
+        help="frame size of --record in pixels (default: 800x600; even numbers for .mp4)",
+    )
+    parser.add_argument(
+        "--record-fps",
+        type=_positive_int,
+        default=15,
+        metavar="N",
+        help="frames per sim second of --record (default: 15; at most 50 for .gif)",
+    )
+    parser.add_argument(
+        "--quiet",
+        action="store_true",
+        help="print nothing (no progress bar, no summary); errors still go to stderr",
+    )
+
+
+# ----- loading --------------------------------------------------------------------------------
+
+
+def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimulationCore:
+    """Build the simulation of the scenario file at ``path`` (as ``from_yaml`` does).
+
+    Args:
+        path: The scenario YAML (flat or nested layout).
+        gui_on: Value for ``gui``, replacing the scenario's.
+        rtf: Value for ``target_rtf``; None keeps the scenario's, or 0 if it sets none.
+
+    Raises:
+        FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
+    """
+    config = load_yaml_config(path)
+    if any(key in SCENARIO_SECTIONS for key in config):
+        if config.get("simulation") is None:
+            config["simulation"] = {}
+        settings = config["simulation"]
+    else:
+        settings = config
+    # A malformed 'simulation:' section is left for the loader to report.
+    if isinstance(settings, dict):
+        settings["gui"] = gui_on
+        if rtf is not None:
+            settings["target_rtf"] = rtf
+        else:
+            settings.setdefault("target_rtf", 0.0)
+    return MultiRobotSimulationCore.from_dict(config, source=str(path), base_dir=path.parent)
+
+
+# ----- stepping -------------------------------------------------------------------------------
+
+
+def steps_for(duration: float, timestep: float) -> int:
+    """The fewest whole steps of ``timestep`` covering ``duration`` (both in sim seconds)."""
+    # The tolerance absorbs float error such as 0.3 / 0.1 = 2.9999999999999996.
+    return math.ceil(duration / timestep - 1e-9)
+
+
+def run_steps(sim: MultiRobotSimulationCore, steps: int, on_frame: Callable[[], None]) -> int:
+    """Call ``sim.step_once()`` ``steps`` times, paced at ``params.target_rtf`` when it is > 0.
+
+    Args:
+        sim: The simulation.
+        steps: Steps to run.
+        on_frame: Called after every batch of steps (and while paused): progress, GUI keys.
+
+    Returns:
+        Steps run.
+
+    Raises:
+        CliError: if the simulation is paused without a GUI to resume it.
+    """
+    params = sim.params
+    start = sim.step_count
+    end = start + steps
+    pacer = (
+        RealTimePacer(params.target_rtf, params.max_steps_per_frame)
+        if params.target_rtf > 0
+        else None
+    )
+    if pacer is not None:
+        pacer.start(sim.sim_time)
+    while sim.step_count < end:
+        if sim.is_paused:
+            if not sim.is_gui:
+                raise CliError(
+                    f"the simulation was paused at sim time {sim.sim_time:.3f} s (by a callback "
+                    "or plugin) and there is no GUI to resume it",
+                    exit_code=1,
+                )
+            on_frame()
+            time.sleep(1.0 / params.gui_min_fps)
+            if pacer is not None:
+                pacer.start(sim.sim_time)
+            continue
+        batch = (
+            pacer.steps_now(sim.sim_time, params.timestep)
+            if pacer is not None
+            else params.max_steps_per_frame
+        )
+        for _ in range(min(batch, end - sim.step_count)):
+            sim.step_once()
+        on_frame()
+    return sim.step_count - start
+
+
+class ActionTally:
+    """Counts ``ACTION_COMPLETED`` and ``ACTION_FAILED`` events of a simulation."""
+
+    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+        self.completed = 0
+        self.failed = 0
+        sim.events.on(SimEvents.ACTION_COMPLETED, self._on_completed)
+        sim.events.on(SimEvents.ACTION_FAILED, self._on_failed)
+
+    def _on_completed(self, **_: Any) -> None:
+        self.completed += 1
+
+    def _on_failed(self, **_: Any) -> None:
+        self.failed += 1
+
+
+# ----- the summary ----------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class RunSummary:
+    """What one run did.
+
+    Attributes:
+        robots: Agents in the simulation at the end.
+        objects: Other sim objects at the end (not counting robots).
+        sim_time: Sim seconds at the end.
+        steps: Steps this run took.
+        wall_time: Wall seconds spent stepping (loading not included).
+        actions_completed: ``ACTION_COMPLETED`` events during the run.
+        actions_failed: ``ACTION_FAILED`` events (failed or cancelled actions).
+        collisions: ``sim.collision_count`` at the end.
+        recording: The saved recording, if any.
+        interrupted: Whether Ctrl+C stopped the run early.
+    """
+
+    robots: int
+    objects: int
+    sim_time: float
+    steps: int
+    wall_time: float
+    actions_completed: int
+    actions_failed: int
+    collisions: int
+    recording: str | None = None
+    interrupted: bool = False
+
+    @property
+    def real_time_factor(self) -> float:
+        """Sim seconds run per wall second (``inf`` if no wall time was measured)."""
+        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+
+def format_summary(summary: RunSummary) -> str:
+    """The summary as aligned ``name: value`` lines."""
+    rtf = summary.real_time_factor
+    rows = [
+        ("robots", str(summary.robots)),
+        ("objects", f"{summary.objects} (not counting robots)"),
+        ("sim time", f"{summary.sim_time:.3f} s"),
+        ("steps", str(summary.steps)),
+        ("wall time", f"{summary.wall_time:.3f} s"),
+        ("real-time factor", f"{rtf:.1f}x" if math.isfinite(rtf) else "inf"),
+        ("actions completed", str(summary.actions_completed)),
+        ("actions failed", str(summary.actions_failed)),
+        ("collisions", str(summary.collisions)),
+    ]
+    if summary.recording is not None:
+        rows.append(("recording", summary.recording))
+    if summary.interrupted:
+        rows.append(("interrupted", "yes (Ctrl+C)"))
+    return "\n".join(f"{name + ':':<19}{value}" for name, value in rows)
+
+
+# ----- the command ----------------------------------------------------------------------------
+
+
+def execute(args: argparse.Namespace) -> int:
+    """Run the ``run`` command; return the exit code."""
+    path = Path(args.scenario)
+    try:
+        sim = load_scenario(path, args.gui, args.rtf)
+    except (ValueError, TypeError, OSError) as exc:
+        raise CliError(str(exc)) from exc
+    try:
+        return _run_loaded(sim, path, args)
+    finally:
+        sim.close()
+
+
+def _duration(sim: MultiRobotSimulationCore, path: Path, requested: float | None) -> float:
+    if requested is not None:
+        return requested
+    duration = sim.params.duration
+    if duration <= 0:
+        raise CliError(
+            f"{path}: the scenario sets no run length (simulation.duration = {duration}); "
+            "give one with --duration SECONDS"
+        )
+    return duration
+
+
+def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> None:
+    width, height = args.record_size
+    try:
+        sim.start_recording(args.record, width=width, height=height, fps=args.record_fps)
+    except (ImportError, ValueError) as exc:
+        raise CliError(f"--record {args.record}: {exc}") from exc
+
+
+def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
+    duration = _duration(sim, path, args.duration)
+    tally = ActionTally(sim)
+    if args.record:
+        _start_recording(sim, args)
+    if args.gui:
+        sim.setup_monitor()
+    bar = ProgressBar(duration, sys.stderr) if not args.quiet else None
+    sim_start = sim.sim_time
+
+    def on_frame() -> None:
+        if sim.is_gui:
+            gui.handle_keyboard(sim)
+        sim.update_monitor()
+        if bar is not None:
+            bar.update(sim.sim_time - sim_start)
+
+    start_step, interrupted = sim.step_count, False
+    wall0 = time.perf_counter()
+    if bar is not None:
+        bar.start()
+    try:
+        run_steps(sim, steps_for(duration, sim.params.timestep), on_frame)
+    except KeyboardInterrupt:
+        interrupted = True
+    wall = time.perf_counter() - wall0
+    if bar is not None:
+        bar.finish(sim.sim_time - sim_start)
+    saved = sim.stop_recording() if args.record else None
+    if not args.quiet:
+        steps = sim.step_count - start_step
+        print(format_summary(_summarize(sim, tally, steps, wall, saved, interrupted)))
+    return INTERRUPTED_EXIT_CODE if interrupted else 0
+
+
+def _summarize(
+    sim: MultiRobotSimulationCore,
+    tally: ActionTally,
+    steps: int,
+    wall: float,
+    recording: str | None,
+    interrupted: bool,
+) -> RunSummary:
+    robots = len(sim.agents)
+    return RunSummary(
+        robots=robots,
+        objects=len(sim.sim_objects) - robots,
+        sim_time=sim.sim_time,
+        steps=steps,
+        wall_time=wall,
+        actions_completed=tally.completed,
+        actions_failed=tally.failed,
+        collisions=sim.collision_count,
+        recording=recording,
+        interrupted=interrupted,
+    )

@@ -1,0 +1,435 @@
+"""The fleet-async command: the installed console script end to end, its pieces in process."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+import fleet_async
+from fleet_async.cli import main
+from fleet_async.cli.errors import CliError
+from fleet_async.cli.progress import ProgressBar, format_progress
+from fleet_async.cli.run import RunSummary, format_summary, load_scenario, run_steps, steps_for
+
+REPO = Path(__file__).resolve().parent.parent
+
+# Two robots that each drive 1 m and wait 0.5 s, and one box; 10 s of sim time by default.
+SCENARIO = """\
+# A tiny test scenario.
+simulation:
+  gui: true
+  monitor: false
+  timestep: 0.1
+  duration: 10.0
+entities:
+  - {type: sim_object, name: box, pose: [0.0, 3.0, 0.1],
+     visual_shape: {shape_type: box, half_extents: [0.1, 0.1, 0.1]},
+     collision_shape: {shape_type: box, half_extents: [0.1, 0.1, 0.1]}}
+  - name: r0
+    urdf_path: simple_cube
+    pose: [0.0, 0.0, 0.1]
+    controller: {type: omni, max_linear_vel: 1.0}
+    actions:
+      - {type: move, path: [[1.0, 0.0, 0.1]]}
+      - {type: wait, duration: 0.5}
+  - name: r1
+    urdf_path: simple_cube
+    pose: [0.0, -2.0, 0.1]
+    controller: {type: omni, max_linear_vel: 1.0}
+    actions:
+      - {type: move, path: [[1.0, -2.0, 0.1]]}
+      - {type: wait, duration: 0.5}
+"""
+
+
+@pytest.fixture(scope="module")
+def script() -> str:
+    """The installed console script; its absence is a failure, not a skip."""
+    path = shutil.which("fleet-async")
+    assert path is not None, 'fleet-async is not installed: pip install -e ".[test]"'
+    return path
+
+
+@pytest.fixture
+def scenario(tmp_path: Path) -> Path:
+    path = tmp_path / "tiny.yaml"
+    path.write_text(SCENARIO)
+    return path
+
+
+def cli(
+    script: str, *args: str | Path, cwd: Path | None = None, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """Run the console script headless (no display) and capture its output."""
+    base = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    return subprocess.run(
+        [script, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=cwd,
+        env={**base, **(env or {})},
+        check=False,
+    )
+
+
+def summary_of(stdout: str) -> dict[str, str]:
+    """``name: value`` lines of the run summary."""
+    pairs = (line.split(":", 1) for line in stdout.splitlines() if ":" in line)
+    return {name.strip(): value.strip() for name, value in pairs}
+
+
+def error_line(stderr: str) -> str:
+    """The ``fleet-async: error:`` line (pybullet prints its build time on stderr too)."""
+    lines = [line for line in stderr.splitlines() if line.startswith("fleet-async: error: ")]
+    assert len(lines) == 1, stderr
+    assert "Traceback" not in stderr
+    return lines[0]
+
+
+# ----- help -----------------------------------------------------------------------------------
+
+
+def test_help_names_every_subcommand(script):
+    result = cli(script, "--help")
+    assert result.returncode == 0, result.stderr
+    for command in ("run", "examples", "bench"):
+        assert f"\n  {command} " in result.stdout
+
+
+@pytest.mark.parametrize(
+    ("command", "options"),
+    [
+        ("run", ["--duration", "--gui", "--rtf", "--record", "--record-size", "--quiet"]),
+        ("examples", ["--list", "--run", "--copy"]),
+        ("bench", ["--n", "--large", "--json", "--profile"]),
+    ],
+)
+def test_each_subcommand_explains_its_options(command, options, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([command, "--help"])
+    assert exit_info.value.code == 0
+    out = capsys.readouterr().out
+    for option in options:
+        assert f"  {option} " in out, option
+
+
+def test_python_dash_m_runs_the_same_command():
+    result = subprocess.run(
+        [sys.executable, "-m", "fleet_async.cli", "--version"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == f"fleet-async {fleet_async.__version__}"
+
+
+# ----- run ------------------------------------------------------------------------------------
+
+
+def test_run_prints_the_summary(script, scenario):
+    result = cli(script, "run", scenario)
+    assert result.returncode == 0, result.stderr
+    summary = summary_of(result.stdout)
+    assert summary["robots"] == "2"
+    assert summary["objects"] == "1 (not counting robots)"
+    assert summary["sim time"] == "10.000 s"
+    assert summary["steps"] == "100"
+    assert summary["actions completed"] == "4"
+    assert summary["actions failed"] == "0"
+    assert summary["collisions"] == "0"
+    assert "recording" not in summary
+
+
+def test_run_duration_option_overrides_the_scenario(script, scenario):
+    result = cli(script, "run", scenario, "--duration", "0.25")
+    assert result.returncode == 0, result.stderr
+    summary = summary_of(result.stdout)
+    assert (summary["steps"], summary["sim time"]) == ("3", "0.300 s")
+    assert summary["actions completed"] == "0"
+
+
+def test_run_quiet_prints_nothing(script, scenario):
+    result = cli(script, "run", scenario, "--duration", "1", "--quiet")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+
+
+def test_run_records_a_gif(script, scenario, tmp_path):
+    out = tmp_path / "clips" / "run.gif"
+    result = cli(
+        script,
+        "run",
+        scenario,
+        "--duration",
+        "1",
+        "--record",
+        out,
+        "--record-size",
+        "64x48",
+        "--record-fps",
+        "5",
+    )
+    assert result.returncode == 0, result.stderr
+    assert summary_of(result.stdout)["recording"] == str(out)
+    with Image.open(out) as image:
+        assert (image.format, image.size) == ("GIF", (64, 48))
+        assert image.n_frames >= 2
+
+
+def test_run_record_without_pillow_explains_what_to_install(script, scenario, tmp_path):
+    shadow = tmp_path / "shadow" / "PIL"
+    shadow.mkdir(parents=True)
+    (shadow / "__init__.py").write_text("raise ImportError('Pillow hidden by the test')\n")
+    result = cli(
+        script,
+        "run",
+        scenario,
+        "--duration",
+        "1",
+        "--record",
+        tmp_path / "out.gif",
+        env={"PYTHONPATH": str(shadow.parent)},
+    )
+    assert result.returncode == 2
+    line = error_line(result.stderr)
+    assert "needs Pillow" in line
+    assert 'pip install "fleet-async[record]"' in line
+    assert not (tmp_path / "out.gif").exists()
+
+
+def test_run_bad_key_names_key_and_file(script, tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("simulation:\n  timestep: 0.1\n  tiemstep: 0.2\n")
+    result = cli(script, "run", bad, "--duration", "1")
+    assert result.returncode == 2
+    line = error_line(result.stderr)
+    assert str(bad) in line
+    assert "'tiemstep'" in line
+    assert result.stdout == ""
+
+
+def test_run_missing_file_is_an_error(script, tmp_path):
+    result = cli(script, "run", tmp_path / "nope.yaml")
+    assert result.returncode == 2
+    assert str(tmp_path / "nope.yaml") in error_line(result.stderr)
+
+
+def test_run_without_any_duration_asks_for_one(script, tmp_path):
+    path = tmp_path / "forever.yaml"
+    path.write_text("simulation:\n  timestep: 0.1\n")
+    result = cli(script, "run", path)
+    assert result.returncode == 2
+    line = error_line(result.stderr)
+    assert str(path) in line
+    assert "--duration" in line
+
+
+def test_load_scenario_is_headless_and_unpaced_unless_the_scenario_paces(tmp_path):
+    plain = tmp_path / "plain.yaml"
+    plain.write_text("simulation: {gui: true, monitor: false}\n")
+    paced = tmp_path / "paced.yaml"
+    paced.write_text("simulation: {gui: true, monitor: false, target_rtf: 2.5}\n")
+    flat = tmp_path / "flat.yaml"
+    flat.write_text("gui: true\nmonitor: false\ntimestep: 0.05\n")
+    cases = [(plain, None, 0.0), (paced, None, 2.5), (paced, 0.0, 0.0), (flat, 4.0, 4.0)]
+    for path, rtf, expected in cases:
+        sim = load_scenario(path, gui_on=False, rtf=rtf)
+        try:
+            assert (sim.is_gui, sim.params.gui, sim.params.target_rtf) == (False, False, expected)
+        finally:
+            sim.close()
+
+
+def test_steps_for_covers_the_duration_with_whole_steps():
+    assert steps_for(0.3, 0.1) == 3
+    assert steps_for(0.25, 0.1) == 3
+    assert steps_for(10.0, 0.1) == 100
+
+
+def test_run_steps_refuses_a_headless_pause(sim):
+    sim.step_once()
+    sim.pause()
+    with pytest.raises(CliError, match=r"paused at sim time 0\.100 s") as info:
+        run_steps(sim, 5, lambda: None)
+    assert info.value.exit_code == 1
+    assert sim.step_count == 1
+
+
+def test_run_steps_steps_exactly_and_reports_each_frame(sim):
+    frames = []
+    assert run_steps(sim, 25, lambda: frames.append(sim.step_count)) == 25
+    # Unpaced, frames come every max_steps_per_frame (10) steps, the last one short.
+    assert frames == [10, 20, 25]
+
+
+def test_summary_lines():
+    summary = RunSummary(2, 1, 10.0, 100, 0.5, 4, 1, 3, recording="out.gif")
+    assert format_summary(summary).splitlines() == [
+        "robots:            2",
+        "objects:           1 (not counting robots)",
+        "sim time:          10.000 s",
+        "steps:             100",
+        "wall time:         0.500 s",
+        "real-time factor:  20.0x",
+        "actions completed: 4",
+        "actions failed:    1",
+        "collisions:        3",
+        "recording:         out.gif",
+    ]
+
+
+# ----- the progress bar -----------------------------------------------------------------------
+
+
+class FakeTerminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_bar_redraws_at_most_every_interval_on_a_terminal():
+    now = [0.0]
+    stream = FakeTerminal()
+    bar = ProgressBar(10.0, stream, min_interval=0.1, clock=lambda: now[0])
+    bar.start()
+    now[0] = 0.05
+    assert bar.update(1.0) is False
+    now[0] = 0.2
+    assert bar.update(2.0) is True
+    now[0] = 0.25
+    assert bar.update(2.5) is False
+    now[0] = 1.0
+    bar.finish(10.0)
+    assert stream.getvalue() == (
+        "\r[####....................]  2.0/10.0 s   20%  RTF 10.0x"
+        "\r[########################]  10.0/10.0 s  100%  RTF 10.0x\n"
+    )
+
+
+def test_progress_bar_pads_over_a_longer_previous_line():
+    now = [0.0]
+    stream = FakeTerminal()
+    bar = ProgressBar(100.0, stream, min_interval=0.1, clock=lambda: now[0])
+    now[0] = 0.1
+    bar.update(100.0)  # RTF 1000.0x
+    now[0] = 100.0
+    bar.update(100.0)  # RTF 1.0x: three characters shorter
+    first, second = stream.getvalue().split("\r")[1:]
+    assert len(second) == len(first)
+    assert second.endswith("RTF 1.0x   ")
+
+
+def test_progress_bar_draws_nothing_when_not_a_terminal():
+    now = [0.0]
+    stream = io.StringIO()
+    bar = ProgressBar(10.0, stream, clock=lambda: now[0])
+    for step in range(1, 11):
+        now[0] = float(step)
+        assert bar.update(float(step)) is False
+    bar.finish(10.0)
+    assert stream.getvalue() == ""
+
+
+def test_format_progress_clamps_and_handles_no_wall_time():
+    assert format_progress(0.0, 4.0, float("inf"), width=4) == "[....]  0.0/4.0 s    0%  RTF -"
+    assert format_progress(5.0, 4.0, 2.0, width=4) == "[####]  5.0/4.0 s  100%  RTF 2.0x"
+
+
+# ----- examples -------------------------------------------------------------------------------
+
+
+def test_examples_list_names_scripts_and_scenarios(script):
+    result = cli(script, "examples", "--list")
+    assert result.returncode == 0, result.stderr
+    rows = {line.split()[0]: line for line in result.stdout.splitlines() if line.startswith("  ")}
+    assert "Hello, fleet: four robots carry pallets" in rows["hello_fleet"]
+    assert "Three robots each fetch a box" in rows["pick_drop"]
+    assert f"(from {REPO / 'examples'})" in result.stdout
+
+
+def test_examples_run_passes_arguments_and_exit_code_through(script):
+    done = cli(script, "examples", "--run", "hello_fleet", "--max-steps", "300")
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "4/4 pallets delivered" in done.stdout
+    # 50 steps are too few to deliver, and the example says so with exit code 1.
+    cut = cli(script, "examples", "--run", "hello_fleet.py", "--max-steps", "50")
+    assert cut.returncode == 1, cut.stdout + cut.stderr
+    assert "0/4 pallets delivered" in cut.stdout
+
+
+def test_examples_run_a_scenario_with_run_options(script):
+    result = cli(script, "examples", "--run", "pick_drop", "--duration", "2", "--rtf", "0")
+    assert result.returncode == 0, result.stderr
+    summary = summary_of(result.stdout)
+    assert (summary["robots"], summary["steps"]) == ("3", "20")
+
+
+def test_examples_run_unknown_name_suggests(script):
+    result = cli(script, "examples", "--run", "hello")
+    assert result.returncode == 2
+    assert "did you mean 'hello_fleet'?" in error_line(result.stderr)
+
+
+def test_examples_copy_then_refuse_to_overwrite(script, tmp_path):
+    target = tmp_path / "mine"
+    first = cli(script, "examples", "--copy", target)
+    assert first.returncode == 0, first.stderr
+    copied = (target / "hello_fleet.py").read_text()
+    assert copied == (REPO / "examples" / "hello_fleet.py").read_text()
+    assert (target / "scenarios" / "pick_drop.yaml").is_file()
+    assert not list(target.rglob("__pycache__"))
+    (target / "hello_fleet.py").write_text("# my edits\n")
+    second = cli(script, "examples", "--copy", target)
+    assert second.returncode == 2
+    line = error_line(second.stderr)
+    assert "not overwriting" in line
+    assert str(target / "hello_fleet.py") in line
+    assert (target / "hello_fleet.py").read_text() == "# my edits\n"
+
+
+def test_examples_outside_a_source_tree_say_where_they_looked(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(fleet_async, "__file__", str(tmp_path / "fleet_async" / "__init__.py"))
+    assert main(["examples", "--list"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("fleet-async: error: the examples are not installed")
+    assert str(tmp_path / "examples") in err
+
+
+# ----- bench ----------------------------------------------------------------------------------
+
+
+def test_bench_json_matches_the_benchmark_script(script):
+    result = cli(script, "bench", "--n", "100", "--json")
+    assert result.returncode == 0, result.stderr
+    (line,) = result.stdout.splitlines()
+    report = json.loads(line)
+    assert report["n"] == 100
+    assert report["step_ms"] > 0
+    wrapper = subprocess.run(
+        [sys.executable, str(REPO / "benchmarks" / "fleet_bench.py"), "--n", "100", "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert wrapper.returncode == 0, wrapper.stderr
+    same = json.loads(wrapper.stdout)
+    # The same deterministic workload: identical keys and outcome, only timings differ.
+    assert same.keys() == report.keys()
+    assert (same["moving_after"], same["collisions"]) == (
+        report["moving_after"],
+        report["collisions"],
+    )
+
+
+def test_bench_rejects_a_non_positive_size(capsys):
+    assert main(["bench", "--n", "0"]) == 2
+    assert "fleet-async: error: --n: fleet sizes must be > 0, got 0" in capsys.readouterr().err
