@@ -32,8 +32,20 @@ def _check_force(owner: str, value: Any) -> None:
         raise ValueError(f"{owner}.max_force: expected a number >= 0 (N), got {value!r}")
 
 
+class _ArmAction(Action):
+    """What arm actions share: woken when the joints move; cancelling holds the joints."""
+
+    def wait_hint(self) -> WaitHint:
+        """Woken when the agent's joints move."""
+        return ("motion", None)
+
+    def on_cancel(self, agent: Agent) -> None:
+        """Cancelled while running: the joints stop where they are."""
+        agent.stop_joints()
+
+
 @dataclass(eq=False)
-class JointAction(Action):
+class JointAction(_ArmAction):
     """Move joints to target positions and wait until they are within tolerance.
 
     Args:
@@ -75,14 +87,6 @@ class JointAction(Action):
         reached = {j: float(agent.joints.targets[j]) for j in self._targets}
         return agent.are_joints_at_targets(reached, self.tolerance)
 
-    def wait_hint(self) -> WaitHint:
-        """Woken when the agent's joints move."""
-        return ("motion", None)
-
-    def on_cancel(self, agent: Agent) -> None:
-        """Cancelled while running: the joints stop where they are."""
-        agent.stop_joints()
-
     def reset(self) -> None:
         """Forget progress."""
         self._reset_status()
@@ -90,7 +94,7 @@ class JointAction(Action):
 
 
 @dataclass(eq=False)
-class PoseAction(Action):
+class PoseAction(_ArmAction):
     """Move the end effector to a world-frame pose through IK.
 
     The joints are always sent to the best solution found. Once they have settled (within the
@@ -163,14 +167,6 @@ class PoseAction(Action):
             f"end-effector target {format_position(self.target_position)} is unreachable: the best "
             f"solution stops {off:.3f} m from it (tolerance {self.tolerance} m)"
         )
-
-    def wait_hint(self) -> WaitHint:
-        """Woken when the agent's joints move."""
-        return ("motion", None)
-
-    def on_cancel(self, agent: Agent) -> None:
-        """Cancelled while running: the joints stop where they are."""
-        agent.stop_joints()
 
     def reset(self) -> None:
         """Forget progress."""

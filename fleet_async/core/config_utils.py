@@ -30,6 +30,7 @@ __all__ = [
     "load_config",
     "load_yaml_config",
     "merge_configs",
+    "register_class",
     "resolve_class",
 ]
 
@@ -141,6 +142,23 @@ def resolve_class(dotted_path: str) -> Any:
     except AttributeError as exc:
         msg = f"Cannot resolve {dotted_path!r}: module {module_name!r} has no attribute {attr!r}"
         raise AttributeError(msg) from exc
+
+
+def register_class(
+    registry: dict[str, Any], name: str, cls: type | str, base: type, what: str
+) -> None:
+    """Put ``cls`` (a subclass of ``base``, or its dotted path) into ``registry`` under ``name``.
+
+    Raises:
+        ValueError: for an empty name.
+        TypeError: if ``cls`` is not a subclass of ``base``.
+    """
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"{what}: expected a non-empty name, got {name!r}")
+    resolved = resolve_class(cls) if isinstance(cls, str) else cls
+    if not (isinstance(resolved, type) and issubclass(resolved, base)):
+        raise TypeError(f"{what}({name!r}): {cls!r} is not a {base.__name__} subclass")
+    registry[name] = resolved
 
 
 def dataclass_from_dict(

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Generic, TypeVar, cast
 import numpy as np
 
 from fleet_async.core.agent import Agent
-from fleet_async.core.config_utils import load_yaml_config, resolve_class
+from fleet_async.core.config_utils import load_yaml_config, register_class
 from fleet_async.core.geometry import Pose
 from fleet_async.core.grid_spawn import (
     GridSpawnParams,
@@ -66,12 +66,7 @@ def register_entity_class(name: str, cls: type[SimObject] | str) -> None:
         ValueError: for an empty name.
         TypeError: if ``cls`` is not a SimObject subclass.
     """
-    if not isinstance(name, str) or not name:
-        raise ValueError(f"register_entity_class: expected a non-empty name, got {name!r}")
-    resolved = resolve_class(cls) if isinstance(cls, str) else cls
-    if not (isinstance(resolved, type) and issubclass(resolved, SimObject)):
-        raise TypeError(f"register_entity_class({name!r}): {cls!r} is not a SimObject subclass")
-    ENTITY_REGISTRY[name] = resolved
+    register_class(ENTITY_REGISTRY, name, cls, SimObject, "register_entity_class")
 
 
 def get_entity_class(name: str) -> type[SimObject]:

@@ -29,7 +29,7 @@ from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.agent_manager import AgentManager
-from fleet_async.core.config_utils import load_yaml_config, resolve_class
+from fleet_async.core.config_utils import load_yaml_config, register_class, resolve_class
 from fleet_async.core.managers import SimObjectManager, get_entity_class, register_entity_class
 from fleet_async.core.params import SimulationParams
 from fleet_async.core.plugins import SimPlugin
@@ -78,12 +78,7 @@ def register_sim_plugin(name: str, cls: type[SimPlugin] | str) -> None:
         ValueError: for an empty name.
         TypeError: if ``cls`` is not a SimPlugin subclass.
     """
-    if not isinstance(name, str) or not name:
-        raise ValueError(f"register_sim_plugin: expected a non-empty name, got {name!r}")
-    resolved = resolve_class(cls) if isinstance(cls, str) else cls
-    if not (isinstance(resolved, type) and issubclass(resolved, SimPlugin)):
-        raise TypeError(f"register_sim_plugin({name!r}): {cls!r} is not a SimPlugin subclass")
-    SIM_PLUGIN_REGISTRY[name] = resolved
+    register_class(SIM_PLUGIN_REGISTRY, name, cls, SimPlugin, "register_sim_plugin")
 
 
 class ScenarioApi:
