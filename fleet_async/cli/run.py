@@ -19,10 +19,10 @@ from typing import Any
 
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
-from fleet_async.core import gui
+from fleet_async.core import gui, runner
 from fleet_async.core.config_utils import load_yaml_config
 from fleet_async.core.events import SimEvents
-from fleet_async.core.runner import RealTimePacer
+from fleet_async.core.runner import steps_for
 from fleet_async.core.scenario import SCENARIO_SECTIONS
 from fleet_async.core.simulation import MultiRobotSimulationCore
 
@@ -163,19 +163,9 @@ def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimu
 # ----- stepping -------------------------------------------------------------------------------
 
 
-def steps_for(duration: float, timestep: float) -> int:
-    """The fewest whole steps of ``timestep`` covering ``duration`` (both in sim seconds)."""
-    # The tolerance absorbs float error such as 0.3 / 0.1 = 2.9999999999999996.
-    return math.ceil(duration / timestep - 1e-9)
-
-
 def run_steps(sim: MultiRobotSimulationCore, steps: int, on_frame: Callable[[], None]) -> int:
-    """Call ``sim.step_once()`` ``steps`` times, paced at ``params.target_rtf`` when it is > 0.
-
-    Args:
-        sim: The simulation.
-        steps: Steps to run.
-        on_frame: Called after every batch of steps (and while paused): progress, GUI keys.
+    """Run ``steps`` steps (paced at ``params.target_rtf`` when it is > 0), calling
+    ``on_frame`` after every batch of steps.
 
     Returns:
         Steps run.
@@ -183,38 +173,17 @@ def run_steps(sim: MultiRobotSimulationCore, steps: int, on_frame: Callable[[], 
     Raises:
         CliError: if the simulation is paused without a GUI to resume it.
     """
-    params = sim.params
-    start = sim.step_count
-    end = start + steps
-    pacer = (
-        RealTimePacer(params.target_rtf, params.max_steps_per_frame)
-        if params.target_rtf > 0
-        else None
-    )
-    if pacer is not None:
-        pacer.start(sim.sim_time)
-    while sim.step_count < end:
-        if sim.is_paused:
-            if not sim.is_gui:
-                raise CliError(
-                    f"the simulation was paused at sim time {sim.sim_time:.3f} s (by a callback "
-                    "or plugin) and there is no GUI to resume it",
-                    exit_code=1,
-                )
-            on_frame()
-            time.sleep(1.0 / params.gui_min_fps)
-            if pacer is not None:
-                pacer.start(sim.sim_time)
-            continue
-        batch = (
-            pacer.steps_now(sim.sim_time, params.timestep)
-            if pacer is not None
-            else params.max_steps_per_frame
-        )
-        for _ in range(min(batch, end - sim.step_count)):
-            sim.step_once()
+
+    def frame() -> None:
+        if sim.is_paused and not sim.is_gui:
+            raise CliError(
+                f"the simulation was paused at sim time {sim.sim_time:.3f} s (by a callback "
+                "or plugin) and there is no GUI to resume it",
+                exit_code=1,
+            )
         on_frame()
-    return sim.step_count - start
+
+    return runner.run_steps(sim, steps, frame)
 
 
 class ActionTally:
@@ -340,7 +309,6 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     def on_frame() -> None:
         if sim.is_gui:
             gui.handle_keyboard(sim)
-        sim.update_monitor()
         if bar is not None:
             bar.update(sim.sim_time - sim_start)
 

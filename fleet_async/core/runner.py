@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["RealTimePacer", "run_loop"]
+__all__ = ["RealTimePacer", "run_loop", "run_steps", "steps_for"]
 
 logger = logging.getLogger(__name__)
 
@@ -63,20 +63,29 @@ class RealTimePacer:
         return max(1, min(behind_steps, self.max_steps_per_frame))
 
 
-def run_loop(
-    sim: MultiRobotSimulationCore, duration: float, idle: Callable[[], None] | None = None
+def steps_for(duration: float, timestep: float) -> int:
+    """The fewest whole steps of ``timestep`` covering ``duration`` (both in sim seconds)."""
+    # The tolerance absorbs float error such as 0.3 / 0.1 = 2.9999999999999996.
+    return math.ceil(duration / timestep - 1e-9)
+
+
+def run_steps(
+    sim: MultiRobotSimulationCore, steps: int | None, idle: Callable[[], None] | None = None
 ) -> int:
-    """Step ``sim`` for ``duration`` sim seconds (forever if <= 0); return steps run.
+    """Call ``sim.step_once()`` ``steps`` times (forever if None), paced at ``target_rtf``.
 
     Args:
         sim: The simulation.
-        duration: Sim seconds to run: the fewest whole steps that cover it.
-        idle: Called once per frame (after each batch of steps and while paused): GUI polling.
+        steps: Steps to run, or None to run until interrupted.
+        idle: Called once per frame (after each batch of steps, and while paused): GUI
+            polling, progress display. It may raise to stop the run.
+
+    Returns:
+        Steps run.
     """
     params = sim.params
     start = sim.step_count
-    # The fewest whole steps covering ``duration`` (the tolerance absorbs 0.3 / 0.1 = 2.9999...).
-    end = start + math.ceil(duration / params.timestep - 1e-9) if duration > 0 else None
+    end = None if steps is None else start + steps
     pacer = (
         RealTimePacer(params.target_rtf, params.max_steps_per_frame)
         if params.target_rtf > 0
@@ -84,24 +93,44 @@ def run_loop(
     )
     if pacer is not None:
         pacer.start(sim.sim_time)
-    batch = params.max_steps_per_frame
-    try:
-        while end is None or sim.step_count < end:
-            if sim.is_paused:
-                if idle is not None:
-                    idle()
-                time.sleep(1.0 / params.gui_min_fps)
-                if pacer is not None:
-                    pacer.start(sim.sim_time)
-                continue
-            n = pacer.steps_now(sim.sim_time, params.timestep) if pacer is not None else batch
-            if end is not None:
-                n = min(n, end - sim.step_count)
-            for _ in range(n):
-                sim.step_once()
-            sim.update_monitor()
+    while end is None or sim.step_count < end:
+        if sim.is_paused:
             if idle is not None:
                 idle()
+            time.sleep(1.0 / params.gui_min_fps)
+            if pacer is not None:
+                pacer.start(sim.sim_time)
+            continue
+        n = (
+            pacer.steps_now(sim.sim_time, params.timestep)
+            if pacer is not None
+            else params.max_steps_per_frame
+        )
+        if end is not None:
+            n = min(n, end - sim.step_count)
+        for _ in range(n):
+            sim.step_once()
+        sim.update_monitor()
+        if idle is not None:
+            idle()
+    return sim.step_count - start
+
+
+def run_loop(
+    sim: MultiRobotSimulationCore, duration: float, idle: Callable[[], None] | None = None
+) -> int:
+    """Step ``sim`` for ``duration`` sim seconds (forever if <= 0); return steps run.
+
+    Ctrl+C ends the run quietly (logged), as ``run_simulation`` promises.
+
+    Args:
+        sim: The simulation.
+        duration: Sim seconds to run: the fewest whole steps that cover it.
+        idle: Called once per frame (after each batch of steps and while paused): GUI polling.
+    """
+    start = sim.step_count
+    try:
+        run_steps(sim, steps_for(duration, sim.params.timestep) if duration > 0 else None, idle)
     except KeyboardInterrupt:
         logger.info("run_simulation interrupted at sim time %.3f s", sim.sim_time)
     return sim.step_count - start
