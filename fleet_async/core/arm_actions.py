@@ -35,9 +35,11 @@ def _check_force(owner: str, value: Any) -> None:
 class _ArmAction(Action):
     """What arm actions share: woken when the joints move; cancelling holds the joints."""
 
+    _polled: bool = False  # physics joints: checked every step (motors settle asymptotically)
+
     def wait_hint(self) -> WaitHint:
-        """Woken when the agent's joints move."""
-        return ("motion", None)
+        """Woken when kinematic joints move; polled each step for physics joints."""
+        return ("poll", None) if self._polled else ("motion", None)
 
     def on_cancel(self, agent: Agent) -> None:
         """Cancelled while running: the joints stop where they are."""
@@ -76,6 +78,7 @@ class JointAction(_ArmAction):
         if self._targets is None:
             if agent.get_num_joints() == 0:
                 return self.fail(f"{agent!r} has no joints")
+            self._polled = not agent.joints.kinematic
             if self.tolerance is None:
                 self.tolerance = agent.joint_tolerance
             try:
@@ -142,6 +145,7 @@ class PoseAction(_ArmAction):
             self._started = True
             if agent.get_num_joints() == 0:
                 return self.fail(f"{agent!r} has no joints")
+            self._polled = not agent.joints.kinematic
             try:
                 self.reachable = agent.move_end_effector(
                     self.target_position,

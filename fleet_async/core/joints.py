@@ -267,6 +267,9 @@ class JointSet:
         """
         if not self.kinematic:
             self.refresh()
+            active = ~np.isnan(self.targets)
+            # Motors approach their targets asymptotically: settled within 0.1 mrad / mm.
+            self.moving = bool(np.any(np.abs(self.positions[active] - self.targets[active]) > 1e-4))
             return True
         active = ~np.isnan(self.targets)
         delta = np.where(active, self.targets - self.positions, 0.0)
@@ -361,7 +364,8 @@ class JointMotion:
         for key in sorted(self._active):
             agent, joints = self._active[key]
             joints.advance(dt)
-            if not joints.moving and joints.kinematic:
+            if not joints.moving:
                 del self._active[key]
-                joints.velocities[:] = 0.0  # at rest from now on
+                if joints.kinematic:
+                    joints.velocities[:] = 0.0  # at rest from now on
             self._wake(agent)

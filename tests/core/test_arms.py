@@ -455,3 +455,16 @@ def test_physics_arm_is_driven_by_motors():
         )
     finally:
         sim.close()
+
+
+def test_physics_joint_action_completes_even_with_a_tight_tolerance():
+    sim = MultiRobotSimulationCore(headless_params(physics=True, timestep=1 / 240))
+    try:
+        a = Agent.from_urdf("kuka_iiwa", use_fixed_base=True, sim_core=sim)
+        action = JointAction(target_joint_positions={"lbr_iiwa_joint_2": 0.4}, tolerance=0.002)
+        a.add_action(action)
+        run_until(sim, action, limit=2000)
+        assert action.status is ActionStatus.COMPLETED
+        assert abs(a.get_joint_state(1)[0] - 0.4) <= 0.002
+    finally:
+        sim.close()
