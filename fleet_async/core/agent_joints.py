@@ -14,7 +14,7 @@ does not name use the class default, 0.01); ``None`` means the agent's ``joint_t
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import numpy as np
 
@@ -25,6 +25,7 @@ from fleet_async.core.joints import JointSet, ToleranceSpec, read_joint_infos
 from fleet_async.core.tools import resolve_link_index
 
 if TYPE_CHECKING:
+    from fleet_async.core.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["AgentJointsApi"]
@@ -50,6 +51,11 @@ class AgentJointsApi:
     _ik_params: IKParams
     _joint_tolerance: ToleranceSpec
     _joint_set: JointSet | None
+
+    @property
+    def _agent(self) -> Agent:
+        """This object as the Agent it is mixed into (for collaborators that take an Agent)."""
+        return cast("Agent", self)
 
     # ----- the joint set ------------------------------------------------------------------
 
@@ -103,7 +109,7 @@ class AgentJointsApi:
         tol = self._joint_tolerance
         if tol is None:
             return self._DEFAULT_JOINT_TOLERANCE
-        return tol  # type: ignore[return-value]
+        return cast("float | list[float] | dict[str, float]", tol)
 
     @joint_tolerance.setter
     def joint_tolerance(self, value: ToleranceSpec) -> None:
@@ -227,7 +233,7 @@ class AgentJointsApi:
 
     def _activate_joints(self) -> None:
         if self.sim_core is not None:
-            self.sim_core.joint_motion.activate(self, self.joints)  # type: ignore[arg-type]
+            self.sim_core.joint_motion.activate(self._agent, self.joints)
 
     # ----- convergence --------------------------------------------------------------------
 
@@ -291,7 +297,7 @@ class AgentJointsApi:
     ) -> tuple[np.ndarray, np.ndarray]:
         """World (position, orientation [x, y, z, w]) of the end-effector link."""
         sim = self._sim_for("get_end_effector_pose")
-        return sim.world.link_pose(self, self.resolve_end_effector(end_effector_link))  # type: ignore[arg-type]
+        return sim.world.link_pose(self._agent, self.resolve_end_effector(end_effector_link))
 
     def move_end_effector(
         self,
@@ -336,7 +342,7 @@ class AgentJointsApi:
             else _vector(target_orientation, 4, "target_orientation")
         )
         ee = self.resolve_end_effector(end_effector_link)
-        sim.world.sync_object(self)  # type: ignore[arg-type]
+        sim.world.sync_object(self._agent)
         return solve_ik(self.joints, ee, position, orientation, self._ik_params)
 
     def are_ee_at_target(
@@ -361,7 +367,7 @@ class AgentJointsApi:
     def update_attached_objects_kinematics(self) -> None:
         """Place everything this agent carries at its parent link now (also done every step)."""
         sim = self._sim_for("update_attached_objects_kinematics")
-        sim.attachments.follow_parent(self)  # type: ignore[arg-type]
+        sim.attachments.follow_parent(self._agent)
 
     def _sim_for(self, what: str) -> MultiRobotSimulationCore:
         sim = self.sim_core
