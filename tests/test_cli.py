@@ -234,20 +234,29 @@ def test_run_without_any_duration_asks_for_one(script, tmp_path):
     assert "--duration" in line
 
 
-def test_load_scenario_is_headless_and_unpaced_unless_the_scenario_paces(tmp_path):
+def test_load_scenario_is_unpaced_headless_unless_asked(tmp_path, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     plain = tmp_path / "plain.yaml"
     plain.write_text("simulation: {gui: true, monitor: false}\n")
     paced = tmp_path / "paced.yaml"
     paced.write_text("simulation: {gui: true, monitor: false, target_rtf: 2.5}\n")
     flat = tmp_path / "flat.yaml"
     flat.write_text("gui: true\nmonitor: false\ntimestep: 0.05\n")
-    cases = [(plain, None, 0.0), (paced, None, 2.5), (paced, 0.0, 0.0), (flat, 4.0, 4.0)]
+    cases = [(plain, None, 0.0), (paced, None, 0.0), (paced, 0.0, 0.0), (flat, 4.0, 4.0)]
     for path, rtf, expected in cases:
         sim = load_scenario(path, gui_on=False, rtf=rtf)
         try:
             assert (sim.is_gui, sim.params.gui, sim.params.target_rtf) == (False, False, expected)
         finally:
             sim.close()
+    # With --gui the scenario's own pacing is kept (headless here: GUI falls back to DIRECT).
+    with pytest.warns(RuntimeWarning, match="no display"):
+        sim = load_scenario(paced, gui_on=True, rtf=None)
+    try:
+        assert (sim.params.gui, sim.params.target_rtf) == (True, 2.5)
+    finally:
+        sim.close()
 
 
 def test_steps_for_covers_the_duration_with_whole_steps():

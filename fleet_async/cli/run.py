@@ -100,7 +100,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=_non_negative_float,
         metavar="X",
         help="pace the run at X sim seconds per wall second, 0 for as fast as possible "
-        "(default: the scenario's target_rtf if it sets one, else as fast as possible)",
+        "(default: as fast as possible headless; with --gui, the scenario's target_rtf)",
     )
     parser.add_argument(
         "--record",
@@ -138,7 +138,8 @@ def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimu
     Args:
         path: The scenario YAML (flat or nested layout).
         gui_on: Value for ``gui``, replacing the scenario's.
-        rtf: Value for ``target_rtf``; None keeps the scenario's, or 0 if it sets none.
+        rtf: Value for ``target_rtf``; None keeps the scenario's with a GUI (0 if it sets
+            none) and runs headless runs as fast as possible.
 
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
@@ -155,8 +156,10 @@ def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimu
         settings["gui"] = gui_on
         if rtf is not None:
             settings["target_rtf"] = rtf
-        else:
+        elif gui_on:
             settings.setdefault("target_rtf", 0.0)
+        else:  # nobody is watching: pacing to the wall clock would only slow the run down
+            settings["target_rtf"] = 0.0
     return MultiRobotSimulationCore.from_dict(config, source=str(path), base_dir=path.parent)
 
 
