@@ -102,28 +102,35 @@ class AgentMissionApi:
         agent.add_action(action)
         return ActionHandle(agent, action)
 
+    async def _run(self, action: Action, what: str) -> Action:
+        """Queue ``action`` and wait for it (what ``await self.submit(action)`` does, without
+        building a handle)."""
+        runtime = self._mission_runtime(what)
+        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        agent.add_action(action)
+        return await runtime.wait_action(action, what)
+
     async def move(self, path: Path | Pose | list[Pose], **options: Any) -> Action:
         """Follow ``path``; options as MoveAction (auto_approach, direction, ...)."""
-        if isinstance(path, Pose):
-            path = Path([path])
-        elif not isinstance(path, Path):
+        if not isinstance(path, (Path, Pose)):
             path = Path(list(path))
-        return await self.submit(MoveAction(path=path, **options))
+        # MoveAction turns a single Pose into a Path itself.
+        return await self._run(MoveAction(path=path, **options), "agent.move")  # type: ignore[arg-type]
 
     async def pick(self, target: Any = None, **options: Any) -> Action:
         """Pick ``target`` (a SimObject or body id), or pass PickAction options such as
         ``target_position`` and ``search_radius``."""
         if target is not None:
             options["target_object_id"] = target
-        return await self.submit(PickAction(**options))
+        return await self._run(PickAction(**options), "agent.pick")
 
     async def drop(self, drop_pose: Pose, **options: Any) -> Action:
         """Drop what is carried at ``drop_pose`` (DropAction options)."""
-        return await self.submit(DropAction(drop_pose=drop_pose, **options))
+        return await self._run(DropAction(drop_pose=drop_pose, **options), "agent.drop")
 
     async def wait(self, duration: float, action_type: str = "idle") -> Action:
         """Stand still for ``duration`` sim seconds as a queued WaitAction."""
-        return await self.submit(WaitAction(duration=duration, action_type=action_type))
+        return await self._run(WaitAction(duration=duration, action_type=action_type), "agent.wait")
 
     async def charge(self, duration: float) -> Action:
         """Charge the battery for ``duration`` sim seconds."""
@@ -132,13 +139,16 @@ class AgentMissionApi:
     async def move_joints(self, targets: Any, **options: Any) -> Action:
         """Move joints to ``targets`` (a list, or {joint name: position}) as a JointAction;
         options: ``max_force``, ``tolerance``."""
-        return await self.submit(JointAction(target_joint_positions=targets, **options))
+        return await self._run(
+            JointAction(target_joint_positions=targets, **options), "agent.move_joints"
+        )
 
     async def reach_pose(self, position: Any, orientation: Any = None, **options: Any) -> Action:
         """Bring the end effector to ``position`` ([x, y, z], world frame) and optionally
         ``orientation`` ([qx, qy, qz, qw]) through IK, as a PoseAction (raises
         ActionFailedError when it is out of reach); options: ``end_effector_link``,
         ``max_force``, ``tolerance``."""
-        return await self.submit(
-            PoseAction(target_position=position, target_orientation=orientation, **options)
+        return await self._run(
+            PoseAction(target_position=position, target_orientation=orientation, **options),
+            "agent.reach_pose",
         )

@@ -20,7 +20,7 @@ __all__ = ["AsyncioParker", "Parker", "TrioParker", "Waiter", "parker_for_backen
 class Waiter:
     """One park: who waits, on what kind of thing, and how to undo it if cancelled."""
 
-    __slots__ = ("bucket", "done", "handle", "kind", "mission", "on_abort")
+    __slots__ = ("bucket", "done", "handle", "handle_target", "kind", "mission", "on_abort")
 
     def __init__(self, mission: Any, kind: str, on_abort: Callable[[], None] | None = None) -> None:
         self.mission = mission
@@ -29,6 +29,7 @@ class Waiter:
         self.done = False  # woken or aborted: exactly one of the two happens
         self.handle: Any = None
         self.bucket: list[Waiter] | None = None  # the timer bucket holding it, if any
+        self.handle_target: Any = None  # what an "action" wait waits on
 
 
 class Parker:

@@ -207,6 +207,11 @@ class Runtime:
         self.runnable += 1  # the cancelled task runs again
         if waiter.bucket is not None and waiter in waiter.bucket:
             waiter.bucket.remove(waiter)
+        if waiter.kind == "action":
+            action = waiter.handle_target
+            self._actions.pop(id(action), None)
+            if not action.is_complete():
+                action.cancel()
         if waiter.on_abort is not None:
             waiter.on_abort()
 
@@ -337,17 +342,11 @@ class Runtime:
         """
         mission = self.current(what)
         if not action.is_complete():
-            if id(action) in self._actions:
+            key = id(action)
+            if key in self._actions:
                 raise RuntimeError(f"{what}: another mission is already waiting on this action")
             waiter = Waiter(mission, "action")
-            key = id(action)
-
-            def undo() -> None:
-                self._actions.pop(key, None)
-                if not action.is_complete():
-                    action.cancel()
-
-            waiter.on_abort = undo
+            waiter.handle_target = action  # no per-wait closure: _aborted undoes "action" waits
             self._actions[key] = waiter
             await self.park(waiter)
         else:
