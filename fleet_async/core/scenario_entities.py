@@ -315,19 +315,8 @@ def _find_mesh(value: str, base: FsPath | None, search: list[str], label: str) -
 
 
 def _pose_value(value: Any) -> Pose:
-    """A Pose from a config value; adds ``{position, rpy: [roll, pitch, yaw]}`` (radians) to
-    what ``pose_from_config`` accepts."""
-    if not (isinstance(value, Mapping) and "rpy" in value):
-        return pose_from_config(value)
-    reject_unknown_keys(list(value), ["position", "rpy"], "", "pose")
-    position, rpy = value.get("position", [0.0, 0.0, 0.0]), value["rpy"]
-    for name, numbers in (("position", position), ("rpy", rpy)):
-        ok = isinstance(numbers, (list, tuple)) and len(numbers) == 3
-        if not ok or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers
-        ):
-            raise ValueError(f"pose.{name}: expected 3 numbers, got {numbers!r}")
-    return Pose.from_euler(*position, *rpy)
+    """A Pose from a config value (see ``pose_from_config``)."""
+    return pose_from_config(value)
 
 
 def _path_value(value: Any) -> Path:

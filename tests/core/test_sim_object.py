@@ -455,3 +455,26 @@ def test_batch_spawned_bodies_can_be_picked_up_and_carry(sim):
         obj.attach_object(box(sim, 10.0 + k, 0.0, 0.1), relative_pose=Pose([0, 0, 0.2]))
     got = np.array([o.get_pose().position for o in objs])
     assert np.allclose(got, [[0, 3, 0.3], [0, 3, 0.5], [0, 3, 0.7], [0, 3, 0.9]])
+
+
+@pytest.mark.parametrize(
+    ("pose", "expected_yaw"),
+    [
+        ({"position": [1, 2, 0.1], "rpy": [0, 0, 0.5]}, 0.5),
+        ({"position": [1, 2, 0.1], "yaw": 0.25}, 0.25),
+        ([1, 2, 0.1], 0.0),
+    ],
+)
+def test_config_poses_accept_rpy_yaw_or_a_list(sim, pose, expected_yaw):
+    cfg = {"visual_shape": {"shape_type": "box", "half_extents": [0.1, 0.1, 0.1]}, "pose": pose}
+    obj = SimObject.from_dict(cfg, sim)
+    assert obj.get_pose().position.tolist() == pytest.approx([1, 2, 0.1])
+    assert obj.get_pose().yaw == pytest.approx(expected_yaw)
+
+
+def test_config_pose_rejects_two_orientations(sim):
+    cfg = {"pose": {"position": [0, 0, 0], "rpy": [0, 0, 1], "yaw": 1.0}}
+    with pytest.raises(ValueError, match="give one of 'orientation', 'yaw' or 'rpy'"):
+        SimObject.from_dict(cfg, sim)
+    with pytest.raises(ValueError, match=r"pose\.rpy: expected 3 finite numbers"):
+        SimObject.from_dict({"pose": {"rpy": [0, 1]}}, sim)
