@@ -27,6 +27,9 @@ from fleet_async import (
     WaitAction,
 )
 
+WARMUP = 10
+"""Untimed steps before the fleet measurements (as in benchmarks/fleet_bench.py)."""
+
 
 def _params() -> SimulationParams:
     return SimulationParams(
@@ -74,8 +77,9 @@ def _fleet(sim: MultiRobotSimulationCore, n: int) -> list[Agent]:
     )
 
 
-def fleet_missions(n: int, steps: int, backend: str) -> float:
-    """ms/step with every agent driven by a mission."""
+def fleet_missions(n: int, steps: int, backend: str, warmup: int = WARMUP) -> float:
+    """ms/step with every agent driven by a mission, timed after ``warmup`` steps (so the
+    missions' start is not charged to the steady state, as in :func:`fleet_queues`)."""
     with MultiRobotSimulationCore(_params()) as sim:
         agents = _fleet(sim, n)
 
@@ -91,12 +95,18 @@ def fleet_missions(n: int, steps: int, backend: str) -> float:
                 for agent in agents:
                     tg.start_soon(shuttle, agent)
 
-        t0 = time.perf_counter()
-        fa.run(sim, main, backend=backend, until=steps * sim.params.timestep)
-        return (time.perf_counter() - t0) * 1e3 / steps
+        started: list[float] = []
+
+        def clock(step: int, **_: Any) -> None:
+            if step == warmup:
+                started.append(time.perf_counter())
+
+        sim.events.on("post_step", clock)
+        fa.run(sim, main, backend=backend, until=(warmup + steps) * sim.params.timestep)
+        return (time.perf_counter() - started[0]) * 1e3 / steps
 
 
-def fleet_queues(n: int, steps: int) -> float:
+def fleet_queues(n: int, steps: int, warmup: int = WARMUP) -> float:
     """ms/step with the same work queued as actions, refilled when a sequence ends.
 
     The refill is event driven (on the completion of each sequence's last action), as a
@@ -123,6 +133,8 @@ def fleet_queues(n: int, steps: int) -> float:
         sim.events.on("action_completed", on_done)
         for agent in agents:
             queue(agent)
+        for _ in range(warmup):
+            sim.step_once()
         t0 = time.perf_counter()
         for _ in range(steps):
             sim.step_once()

@@ -9,7 +9,7 @@ is dropped, a running one stops the robot in that step.
 
 from __future__ import annotations
 
-from collections.abc import Generator
+from collections.abc import Awaitable, Generator
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.action import Action, MoveAction, WaitAction
@@ -76,7 +76,10 @@ class ActionHandle:
         runtime = None if sim is None else sim.mission_runtime
         if runtime is None:
             raise RuntimeError("awaiting an action needs a running mission (fleet_async.run)")
-        return runtime.wait_action(self.action, "await handle").__await__()
+        return self._wait(runtime).__await__()
+
+    async def _wait(self, runtime: MissionRuntime) -> Action:
+        return await runtime.wait_action(self.action, "await handle")
 
 
 class AgentMissionApi:
@@ -102,13 +105,13 @@ class AgentMissionApi:
         agent.add_action(action)
         return ActionHandle(agent, action)
 
-    async def _run(self, action: Action, what: str) -> Action:
-        """Queue ``action`` and wait for it (what ``await self.submit(action)`` does, without
-        building a handle)."""
+    def _run(self, action: Action, what: str) -> Awaitable[Action]:
+        """Queue ``action`` and return the wait for it (what ``await self.submit(action)``
+        does, without building a handle); the commands await it at once."""
         runtime = self._mission_runtime(what)
         agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
         agent.add_action(action)
-        return await runtime.wait_action(action, what)
+        return runtime.wait_action(action, what)
 
     async def move(self, path: Path | Pose | list[Pose], **options: Any) -> Action:
         """Follow ``path``; options as MoveAction (auto_approach, direction, ...)."""

@@ -49,6 +49,15 @@ _EPS = 1e-9
 _PROGRESSING = frozenset({"timer", "action", "condition", "event"})
 
 
+def _action_error(action: Action) -> BaseException | None:
+    """What awaiting ``action`` raises once it has ended (None when it completed)."""
+    if action.status is ActionStatus.FAILED:
+        return ActionFailedError(action)
+    if action.status is ActionStatus.CANCELLED:
+        return ActionCancelledError(action)
+    return None
+
+
 class Mission:
     """Bookkeeping for one mission task."""
 
@@ -77,14 +86,20 @@ class Runtime:
 
     def __init__(self, sim: MultiRobotSimulationCore, backend: str, watchdog: float = 30.0) -> None:
         self.sim = sim
-        self.parker = parker_for_backend(backend)
+        self.parker = parker_for_backend(backend, self)
+        self.park = self.parker.park
+        """``await runtime.park(waiter)``: suspend the current mission until ``wake(waiter)``
+        (counted as parked; cancellable by anyio scopes)."""
         self.watchdog = watchdog
         self.runnable = 0
         self.alive = 0
         self._missions: dict[Any, Mission] = {}  # backend task object -> mission
         self._seq = itertools.count()
         self._timers: dict[int, list[Waiter]] = {}  # wake step -> waiters (unordered)
+        # Pending wakes, delivered in (mission key, sequence) order; sorted lazily, descending,
+        # so the next one is popped from the end.
         self._wakes: list[tuple[tuple[int, ...], int, Waiter, Any, BaseException | None]] = []
+        self._wakes_sorted = True
         self._actions: dict[int, Waiter] = {}
         self._conditions: dict[int, tuple[Waiter, Callable[[], bool]]] = {}
         self._event_waits: dict[str, dict[int, tuple[Waiter, Callable[..., bool] | None]]] = {}
@@ -173,18 +188,19 @@ class Runtime:
             self.alive -= 1
             if on_done is not None:
                 on_done()
-            self._decrement()
+            self.decrement()
 
     # ----- counting and parking -------------------------------------------------------------
 
-    def _decrement(self) -> None:
+    def decrement(self) -> None:
+        """The current mission parks or exits."""
         self.runnable -= 1
         if self.runnable != 0:
             return
         if self.parker.one_at_a_time and self._wakes and self._driver is not None:
             # Baton: while the driver waits, the mission that just parked hands the turn
             # straight to the next wake in key order, without a round trip to the driver.
-            _, _, waiter, value, error = heapq.heappop(self._wakes)
+            _, _, waiter, value, error = self._next_wake()
             self.wake(waiter, value, error)
             return
         if self._driver is not None and not self._driver.done:
@@ -194,13 +210,14 @@ class Runtime:
 
     def note_parked(self) -> None:
         """The current mission waits on something that is not a sim park (a task-group join)."""
-        self._decrement()
+        self.decrement()
 
     def count_wake(self) -> None:
         """A parked mission is about to run again (called by whoever wakes it)."""
         self.runnable += 1
 
-    def _aborted(self, waiter: Waiter) -> None:
+    def aborted(self, waiter: Waiter) -> None:
+        """A parked mission was cancelled: count it runnable and undo what its wait set up."""
         if waiter.done:
             return
         waiter.done = True
@@ -208,22 +225,12 @@ class Runtime:
         if waiter.bucket is not None and waiter in waiter.bucket:
             waiter.bucket.remove(waiter)
         if waiter.kind == "action":
-            action = waiter.handle_target
+            action = waiter.target
             self._actions.pop(id(action), None)
             if not action.is_complete():
                 action.cancel()
         if waiter.on_abort is not None:
             waiter.on_abort()
-
-    async def park(self, waiter: Waiter) -> Any:
-        """Suspend the current mission until ``wake(waiter)``; cancellable by anyio scopes."""
-        self.parker.prepare(waiter)
-        waiter.mission.waiter = waiter
-        self._decrement()
-        try:
-            return await self.parker.wait(waiter, self._aborted)
-        finally:
-            waiter.mission.waiter = None
 
     def wake(self, waiter: Waiter, value: Any = None, error: BaseException | None = None) -> None:
         """Resume ``waiter`` now (counted at once)."""
@@ -237,7 +244,15 @@ class Runtime:
         self, waiter: Waiter, value: Any = None, error: BaseException | None = None
     ) -> None:
         """Resume ``waiter`` at the next wake delivery, in key order."""
-        heapq.heappush(self._wakes, (waiter.mission.key, next(self._seq), waiter, value, error))
+        self._wakes.append((waiter.mission.key, next(self._seq), waiter, value, error))
+        self._wakes_sorted = False
+
+    def _next_wake(self) -> tuple[tuple[int, ...], int, Waiter, Any, BaseException | None]:
+        wakes = self._wakes
+        if not self._wakes_sorted:
+            wakes.sort(reverse=True)  # sequence numbers are unique: waiters never compared
+            self._wakes_sorted = True
+        return wakes.pop()
 
     # ----- settling and stepping --------------------------------------------------------------
 
@@ -249,10 +264,12 @@ class Runtime:
                 if not self._wakes:
                     return
                 if self.parker.one_at_a_time:
-                    _, _, waiter, value, error = heapq.heappop(self._wakes)
+                    _, _, waiter, value, error = self._next_wake()
                     self.wake(waiter, value, error)
                 else:
-                    wakes, self._wakes = sorted(self._wakes, key=lambda w: (w[0], w[1])), []
+                    wakes, self._wakes = self._wakes, []
+                    wakes.sort()  # sequence numbers are unique: waiters never compared
+                    self._wakes_sorted = True
                     for _, _, waiter, value, error in wakes:
                         self.wake(waiter, value, error)
         if scope.cancelled_caught:
@@ -277,9 +294,8 @@ class Runtime:
                     return
                 continue
             driver = Waiter(None, "driver")
-            self.parker.prepare(driver)
             self._driver = driver
-            await self.parker.wait(driver, lambda w: setattr(w, "done", True))
+            await self.parker.wait_driver(driver)
 
     def check_deadlock(self) -> None:
         """Raise if missions are alive but nothing that stepping does can wake any of them."""
@@ -322,45 +338,49 @@ class Runtime:
             raise ValueError(f"sim time must be finite, got {seconds!r}")
         return max(0, math.ceil(seconds / self.sim.params.timestep - _EPS))
 
-    async def sleep_steps(self, steps: int, what: str = "sim.sleep") -> None:
-        """Park the current mission for ``steps`` steps."""
+    # These return the park itself rather than being coroutines, so an ``await sim.sleep()``
+    # or ``await agent.move()`` resumes through one frame fewer on every wake.
+
+    def sleep_steps(self, steps: int, what: str = "sim.sleep") -> Awaitable[None]:
+        """Park the current mission for ``steps`` steps (await the result at once)."""
         mission = self.current(what)
         if steps <= 0:
-            await anyio.lowlevel.checkpoint()
-            return
+            return anyio.lowlevel.checkpoint()
         waiter = Waiter(mission, "timer")
         bucket = self._timers.setdefault(self.sim.step_count + steps, [])
-        waiter.bucket = bucket  # no per-wait closure: _aborted takes it out of the bucket
+        waiter.bucket = bucket  # no per-wait closure: aborted() takes it out of the bucket
         bucket.append(waiter)
-        await self.park(waiter)
+        return self.park(waiter)
 
-    async def wait_action(self, action: Action, what: str) -> Action:
-        """Park until a queued ``action`` ends; return it, or raise if it failed or was cancelled.
+    def wait_action(self, action: Action, what: str) -> Awaitable[Action]:
+        """Park until a queued ``action`` ends (await the result at once); it returns the
+        action, or raises ActionFailedError / ActionCancelledError.
 
         If the waiting mission is cancelled, the action is cancelled too: a queued action is
         dropped, a running one stops its robot in this step.
         """
         mission = self.current(what)
-        if not action.is_complete():
-            key = id(action)
-            if key in self._actions:
-                raise RuntimeError(f"{what}: another mission is already waiting on this action")
-            waiter = Waiter(mission, "action")
-            waiter.handle_target = action  # no per-wait closure: _aborted undoes "action" waits
-            self._actions[key] = waiter
-            await self.park(waiter)
-        else:
-            await anyio.lowlevel.checkpoint()
-        if action.status is ActionStatus.FAILED:
-            raise ActionFailedError(action)
-        if action.status is ActionStatus.CANCELLED:
-            raise ActionCancelledError(action)
+        if action.is_complete():
+            return self._ended(action)
+        key = id(action)
+        if key in self._actions:
+            raise RuntimeError(f"{what}: another mission is already waiting on this action")
+        waiter = Waiter(mission, "action")
+        waiter.target = action  # no per-wait closure: aborted() undoes "action" waits
+        self._actions[key] = waiter
+        return self.park(waiter)
+
+    async def _ended(self, action: Action) -> Action:
+        await anyio.lowlevel.checkpoint()
+        error = _action_error(action)
+        if error is not None:
+            raise error
         return action
 
     def _on_action_end(self, agent: Any = None, action: Any = None, **_: Any) -> None:
         waiter = self._actions.pop(id(action), None)
         if waiter is not None:
-            self.schedule_wake(waiter, action)
+            self.schedule_wake(waiter, action, _action_error(action))
 
     async def wait_until(self, predicate: Callable[[], bool], what: str = "sim.wait_until") -> None:
         """Park until ``predicate()`` is true after a step (returns at once if true now)."""
