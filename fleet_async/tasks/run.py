@@ -78,8 +78,8 @@ async def run_async(
     try:
         async with anyio.create_task_group() as tg:
             runtime.spawn(tg, main, args, (0,), getattr(main, "__name__", "main"), box=box)
+            await runtime.settle()
             while True:
-                await runtime.settle()
                 if runtime.alive == 0:
                     break
                 if until_step is not None and sim.step_count >= until_step:
@@ -87,11 +87,13 @@ async def run_async(
                     break
                 runtime.check_deadlock()
                 sim.step_once()
-                await runtime.after_step()
+                await runtime.after_step()  # ends settled
                 if rtf > 0:  # pacing wraps the loop; missions never see wall time
                     ahead = (sim.sim_time - sim0) / rtf - (time.perf_counter() - wall0)
                     if ahead > 0:
                         await anyio.sleep(ahead)
+                        # missions on real I/O ran meanwhile; let them park again
+                        await runtime.settle()
     finally:
         sim.set_mission_runtime(None)
         runtime.close()
