@@ -17,6 +17,10 @@ if TYPE_CHECKING:
 
 __all__ = ["run", "run_async"]
 
+# Pacing's view of the wall: module attributes so tests can run pacing on a fake clock.
+_wall_clock = time.perf_counter
+_wall_sleep = anyio.sleep
+
 
 def _backend_name() -> str:
     try:
@@ -73,7 +77,7 @@ async def run_async(
     sim.set_mission_runtime(runtime)
     until_step = None if until is None else math.ceil(until / sim.params.timestep - 1e-9)
     rtf = sim.params.target_rtf
-    wall0, sim0 = time.perf_counter(), sim.sim_time
+    wall0, sim0 = _wall_clock(), sim.sim_time
     box: list[Any] = []
     try:
         async with anyio.create_task_group() as tg:
@@ -89,9 +93,9 @@ async def run_async(
                 sim.step_once()
                 await runtime.after_step()  # ends settled
                 if rtf > 0:  # pacing wraps the loop; missions never see wall time
-                    ahead = (sim.sim_time - sim0) / rtf - (time.perf_counter() - wall0)
+                    ahead = (sim.sim_time - sim0) / rtf - (_wall_clock() - wall0)
                     if ahead > 0:
-                        await anyio.sleep(ahead)
+                        await _wall_sleep(ahead)
                         # missions on real I/O ran meanwhile; let them park again
                         await runtime.settle()
     finally:

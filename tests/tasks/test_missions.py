@@ -25,6 +25,7 @@ from fleet_async import (
     SimulationParams,
     WaitAction,
 )
+from fleet_async.tasks import Event
 from fleet_async.tasks.parking import Waiter
 
 if sys.version_info < (3, 11):
@@ -358,3 +359,43 @@ async def test_removing_an_agent_ends_the_awaited_action(fleet_sim):
         with pytest.raises(ActionCancelledError, match="left the simulation"):
             await agent.move(Pose.from_xyz(10, 0, 0.1))
     assert fleet_sim.step_count == 5
+
+
+@pytest.mark.parametrize("backend", ["asyncio", "trio"])
+def test_pacing_follows_target_rtf_and_serves_wakes_from_outside(backend, monkeypatch):
+    """At target_rtf 2 the driver sleeps so that wall time is half the sim time (on a fake
+    wall clock). What the outside world does during a pacing sleep (here: set a sim Event)
+    takes effect before the next step."""
+    run_module = sys.modules["fleet_async.tasks.run"]  # the module, not the function
+    wall = {"now": 100.0}
+    slept = []
+    params = SimulationParams(gui=False, monitor=False, target_rtf=2.0, timestep=0.1)
+    with MultiRobotSimulationCore(params) as sim:
+        ready = Event(sim)
+
+        async def fake_sleep(seconds):
+            slept.append(seconds)
+            wall["now"] += seconds
+            if len(slept) == 3:  # the outside world acts while the driver paces step 3
+                ready.set()
+            await anyio.lowlevel.checkpoint()
+
+        monkeypatch.setattr(run_module, "_wall_clock", lambda: wall["now"])
+        monkeypatch.setattr(run_module, "_wall_sleep", fake_sleep)
+        woke_at = []
+
+        async def waiter():
+            await ready.wait()
+            woke_at.append(sim.step_count)
+
+        async def main():
+            async with sim.task_group() as tg:
+                tg.start_soon(waiter)
+                tg.start_soon(sim.sleep, 1.0)
+
+        fa.run(sim, main, backend=backend)
+        assert woke_at == [3]
+        assert sim.step_count == 10
+        assert len(slept) == 10  # one pacing sleep per step
+        assert sum(slept) == pytest.approx(0.5)
+        assert wall["now"] - 100.0 == pytest.approx(sim.sim_time / 2.0)
