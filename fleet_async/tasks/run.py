@@ -82,9 +82,11 @@ async def run_async(
     try:
         async with anyio.create_task_group() as tg:
             runtime.spawn(tg, main, args, (0,), getattr(main, "__name__", "main"), box=box)
+            tg.start_soon(runtime.watch, name="fleet_async watchdog")
             await runtime.settle()
             while True:
                 if runtime.alive == 0:
+                    tg.cancel_scope.cancel()  # the watchdog
                     break
                 if until_step is not None and sim.step_count >= until_step:
                     tg.cancel_scope.cancel()

@@ -19,6 +19,7 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
+import time
 from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
 
@@ -105,6 +106,7 @@ class Runtime:
         self._event_waits: dict[str, dict[int, tuple[Waiter, Callable[..., bool] | None]]] = {}
         self._timeouts: list[tuple[int, int, SimTimeout]] = []
         self._driver: Waiter | None = None
+        self._driver_since = 0.0  # wall time the driver started waiting for missions
         self._event_handlers: dict[str, Callable[..., None]] = {}
         sim.events.on(SimEvents.ACTION_COMPLETED, self._on_action_end, priority=1_000_000)
         sim.events.on(SimEvents.ACTION_FAILED, self._on_action_end, priority=1_000_000)
@@ -257,27 +259,48 @@ class Runtime:
     # ----- settling and stepping --------------------------------------------------------------
 
     async def settle(self) -> None:
-        """Deliver pending wakes in key order until every mission is parked (or done)."""
-        with anyio.move_on_after(self.watchdog) as scope:
-            while True:
-                await self._quiesce()
-                if not self._wakes:
-                    return
-                if self.parker.one_at_a_time:
-                    _, _, waiter, value, error = self._next_wake()
+        """Deliver pending wakes in key order until every mission is parked (or done).
+
+        Raises:
+            MissionStalledError: (from :meth:`watch`) missions kept the driver waiting for
+                longer than the watchdog allows.
+        """
+        while True:
+            await self._quiesce()
+            if not self._wakes:
+                return
+            if self.parker.one_at_a_time:
+                _, _, waiter, value, error = self._next_wake()
+                self.wake(waiter, value, error)
+            else:
+                wakes, self._wakes = self._wakes, []
+                wakes.sort()  # sequence numbers are unique: waiters never compared
+                self._wakes_sorted = True
+                for _, _, waiter, value, error in wakes:
                     self.wake(waiter, value, error)
-                else:
-                    wakes, self._wakes = self._wakes, []
-                    wakes.sort()  # sequence numbers are unique: waiters never compared
-                    self._wakes_sorted = True
-                    for _, _, waiter, value, error in wakes:
-                        self.wake(waiter, value, error)
-        if scope.cancelled_caught:
+
+    async def watch(self) -> None:
+        """The watchdog, a task beside the missions (not one of them): if the driver has
+        waited for missions for more than ``watchdog`` wall seconds, it fails the driver's
+        wait with MissionStalledError. One task for the whole run, rather than a cancel
+        scope around every settle, keeps the per-step cost down."""
+        while True:
+            await anyio.sleep(self.watchdog / 4)
+            driver = self._driver
+            if driver is None or driver.done:
+                continue
+            if time.perf_counter() - self._driver_since <= self.watchdog:
+                continue
             running = sorted(m.name for m in self._missions.values() if m.waiter is None)
-            raise MissionStalledError(
-                f"missions {running} held the clock for more than {self.watchdog} s of wall time "
-                f"at sim time {self.sim.sim_time:.3f} s "
-                "(a wall-clock sleep or I/O inside a mission?)"
+            self._driver = None
+            driver.done = True
+            self.parker.wake(
+                driver,
+                error=MissionStalledError(
+                    f"missions {running} held the clock for more than {self.watchdog} s of "
+                    f"wall time at sim time {self.sim.sim_time:.3f} s "
+                    "(a wall-clock sleep or I/O inside a mission?)"
+                ),
             )
 
     async def _quiesce(self) -> None:
@@ -295,6 +318,7 @@ class Runtime:
                 continue
             driver = Waiter(None, "driver")
             self._driver = driver
+            self._driver_since = time.perf_counter()
             await self.parker.wait_driver(driver)
 
     def check_deadlock(self) -> None:
