@@ -94,8 +94,7 @@ class FleetMotion:
         (via ``agent.report_motion_end``) itself.
         """
         agent.note_motion_end(reached)
-        now = self._sim.sim_time + self._dt if self._sim.in_step else self._sim.sim_time
-        self.actions.on_motion_end(agent, now, self._dt)
+        self.wake_action(agent)
 
     def wake_action(self, agent: Agent) -> None:
         """Let the action ``agent`` waits on check its condition again (its joints moved)."""

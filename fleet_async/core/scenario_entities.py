@@ -134,7 +134,7 @@ def _plan_entity(
     _resolve_files(config, sim, base_dir, where, label)
     if isinstance(config.get("pose"), Mapping):
         with config_context(where, f"{label}.pose"):
-            config["pose"] = _pose_value(config["pose"])
+            config["pose"] = pose_from_config(config["pose"])
     params = None
     if params_cls is not None:
         with config_context(where, label):
@@ -314,11 +314,6 @@ def _find_mesh(value: str, base: FsPath | None, search: list[str], label: str) -
         raise FileNotFoundError(f"{exc}{first}") from exc
 
 
-def _pose_value(value: Any) -> Pose:
-    """A Pose from a config value (see ``pose_from_config``)."""
-    return pose_from_config(value)
-
-
 def _path_value(value: Any) -> Path:
     if isinstance(value, Path):
         return value
@@ -327,7 +322,7 @@ def _path_value(value: Any) -> Path:
     waypoints = []
     for k, point in enumerate(value):
         try:
-            waypoints.append(_pose_value(point))
+            waypoints.append(pose_from_config(point))
         except ValueError as exc:
             raise ValueError(f"[{k}]: {exc}") from exc
     return Path(waypoints)
@@ -384,5 +379,5 @@ def _pose_converters(cls: type[Action]) -> dict[str, Callable[[Any], Any]]:
         if field.init and Path in kinds:
             converters[field.name] = _path_value
         elif field.init and Pose in kinds:
-            converters[field.name] = lambda v: None if v is None else _pose_value(v)
+            converters[field.name] = lambda v: None if v is None else pose_from_config(v)
     return converters
