@@ -155,7 +155,7 @@ class Agent(AgentMissionApi, AgentJointsApi, SimObject):
     # ----- constructors -------------------------------------------------------------------
 
     @classmethod
-    def from_params(  # type: ignore[override]
+    def from_params(  # type: ignore[override]  # takes AgentSpawnParams, as the seed
         cls, spawn_params: AgentSpawnParams, sim_core: MultiRobotSimulationCore | None = None
     ) -> Agent:
         """Create a URDF, mesh or virtual agent from ``spawn_params``.
@@ -203,7 +203,7 @@ class Agent(AgentMissionApi, AgentJointsApi, SimObject):
         return agent
 
     @classmethod
-    def spawn_batch(  # type: ignore[override]
+    def spawn_batch(  # type: ignore[override]  # takes AgentSpawnParams, as the seed
         cls, params_list: Sequence[AgentSpawnParams], sim_core: MultiRobotSimulationCore
     ) -> list[Agent]:
         """Spawn many agents fast: shape-based bodies are created in batches.
@@ -227,7 +227,7 @@ class Agent(AgentMissionApi, AgentJointsApi, SimObject):
             return wrap_all([body_of.get(i, -1) for i in range(len(params_list))], make, sim_core)
 
     @classmethod
-    def from_mesh(  # type: ignore[override]
+    def from_mesh(  # type: ignore[override]  # the seed's agent parameters, not SimObject's
         cls,
         visual_shape: Any = None,
         collision_shape: Any = None,

@@ -101,7 +101,7 @@ class AgentMissionApi:
         ``await agent.submit(action)`` waits for it to end, like the other commands.
         """
         self._mission_runtime("agent.submit")
-        agent: Agent = self  # type: ignore[assignment]
+        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
         agent.add_action(action)
         return ActionHandle(agent, action)
 
@@ -117,8 +117,8 @@ class AgentMissionApi:
         """Follow ``path``; options as MoveAction (auto_approach, direction, ...)."""
         if not isinstance(path, (Path, Pose)):
             path = Path(list(path))
-        # MoveAction turns a single Pose into a Path itself.
-        return await self._run(MoveAction(path=path, **options), "agent.move")  # type: ignore[arg-type]
+        action = MoveAction(path=path, **options)  # type: ignore[arg-type]  # takes a Pose too
+        return await self._run(action, "agent.move")
 
     async def pick(self, target: Any = None, **options: Any) -> Action:
         """Pick ``target`` (a SimObject or body id), or pass PickAction options such as

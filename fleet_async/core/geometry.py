@@ -125,7 +125,7 @@ def projected_axis_limit(
     """
     if is_scalar(limit):
         return float(limit)  # type: ignore[arg-type]  # is_scalar checked it
-    caps = as_axes(limit, len(limit)).tolist()  # type: ignore[arg-type]
+    caps = as_axes(limit, len(limit)).tolist()  # type: ignore[arg-type]  # not a scalar here
     direction = np.asarray(direction_unit, dtype=np.float64)
     if direction.shape != (len(caps),):
         raise ValueError(f"direction_unit: expected {len(caps)} components, got {direction_unit!r}")

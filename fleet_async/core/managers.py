@@ -409,8 +409,8 @@ class SimObjectManager(Generic[T]):
         """
         cls = self.object_class
         standard = getattr(cls.from_params, "__func__", None) in (
-            SimObject.from_params.__func__,  # type: ignore[attr-defined]
-            Agent.from_params.__func__,  # type: ignore[attr-defined]
+            SimObject.from_params.__func__,  # type: ignore[attr-defined]  # a classmethod's
+            Agent.from_params.__func__,  # type: ignore[attr-defined]  # function
         )
         if self.sim_core is None or not standard:
             return self._spawn_each((self._maker(prm) for prm in params_list), what)

@@ -78,7 +78,7 @@ class SimMissionApi:
     async def sleep_until(self, t: float) -> None:
         """Wait until sim time ``t`` (s); returns at once if it has passed."""
         runtime = self._runtime("sim.sleep_until")
-        now = self.sim_time  # type: ignore[attr-defined]
+        now = self.sim_time  # type: ignore[attr-defined]  # mixed into MultiRobotSimulationCore
         await runtime.sleep_steps(runtime.steps_for(t - now), "sim.sleep_until")
 
     def move_on_after(self, seconds: float, shield: bool = False) -> Any:

@@ -17,7 +17,7 @@ import math
 from collections import deque
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.tasks.parking import Waiter
 
@@ -34,7 +34,7 @@ def _runtime(sim: MultiRobotSimulationCore, what: str) -> Runtime:
         raise RuntimeError(
             f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
         )
-    return runtime  # type: ignore[return-value]
+    return cast("Runtime", runtime)  # the only MissionRuntime there is
 
 
 class Event:
@@ -54,10 +54,11 @@ class Event:
         if self._set:
             return
         self._set = True
-        runtime = self._sim.mission_runtime
         waiters, self._waiters = list(self._waiters.values()), {}
-        for waiter in waiters:
-            runtime.schedule_wake(waiter)  # type: ignore[union-attr]
+        if waiters:  # only a running mission can have parked here
+            runtime = _runtime(self._sim, "Event.set")
+            for waiter in waiters:
+                runtime.schedule_wake(waiter)
 
     async def wait(self) -> None:
         """Wait until the event is set (returns at once if it is)."""
