@@ -73,6 +73,8 @@ async def run_async(
     watchdog: float = 30.0,
 ) -> Any:
     """:func:`run` for code already inside an event loop (asyncio or trio)."""
+    if not watchdog > 0:  # also rejects NaN
+        raise ValueError(f"watchdog must be a positive number of wall seconds, got {watchdog!r}")
     runtime = Runtime(sim, _backend_name(), watchdog)
     sim.set_mission_runtime(runtime)
     until_step = None if until is None else math.ceil(until / sim.params.timestep - 1e-9)

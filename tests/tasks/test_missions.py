@@ -399,3 +399,15 @@ def test_pacing_follows_target_rtf_and_serves_wakes_from_outside(backend, monkey
         assert len(slept) == 10  # one pacing sleep per step
         assert sum(slept) == pytest.approx(0.5)
         assert wall["now"] - 100.0 == pytest.approx(sim.sim_time / 2.0)
+
+
+@pytest.mark.parametrize("watchdog", [0.0, -1.0, float("nan")])
+def test_watchdog_must_be_positive(watchdog):
+    with _sim() as sim:
+
+        async def main():
+            await sim.sleep(0.1)
+
+        with pytest.raises(ValueError, match=r"watchdog must be a positive number.*got"):
+            fa.run(sim, main, watchdog=watchdog)
+        assert sim.step_count == 0
