@@ -100,7 +100,8 @@ async def run_async(
                     ahead = (sim.sim_time - sim0) / rtf - (_wall_clock() - wall0)
                     if ahead > 0:
                         await _wall_sleep(ahead)
-                        # missions on real I/O ran meanwhile; let them park again
+                        # the outside world ran meanwhile and may have woken missions (a
+                        # sim Event set, a cancel): deliver that before the next step
                         await runtime.settle()
     finally:
         sim.set_mission_runtime(None)
