@@ -28,16 +28,17 @@ __all__ = ["AsyncioParker", "Parker", "TrioParker", "Waiter", "parker_for_backen
 class Waiter:
     """One park: who waits, on what kind of thing, and how to undo it if cancelled."""
 
-    __slots__ = ("bucket", "done", "handle", "kind", "mission", "on_abort", "target")
+    __slots__ = ("done", "handle", "kind", "mission", "on_abort", "target")
 
-    def __init__(self, mission: Any, kind: str, on_abort: Callable[[], None] | None = None) -> None:
+    def __init__(
+        self, mission: Any, kind: str, on_abort: Callable[[Waiter], None] | None = None
+    ) -> None:
         self.mission = mission
         self.kind = kind  # "timer", "action", "condition", "event", "sync", "join", "driver"
         self.on_abort = on_abort
         self.done = False  # woken or aborted: exactly one of the two happens
         self.handle: Any = None
-        self.bucket: list[Waiter] | None = None  # the timer bucket holding it, if any
-        self.target: Any = None  # what an "action" wait waits on
+        self.target: Any = None  # what it waits on, for on_abort (an action, a timer bucket)
 
 
 class Parker:

@@ -108,6 +108,9 @@ class Runtime:
         self._driver: Waiter | None = None
         self._driver_since = 0.0  # wall time the driver started waiting for missions
         self._event_handlers: dict[str, Callable[..., None]] = {}
+        # Abort hooks bound once: a bound method per wait is garbage the collector chases.
+        self._on_timer_abort = self._undo_timer
+        self._on_action_abort = self._undo_action
         sim.events.on(SimEvents.ACTION_COMPLETED, self._on_action_end, priority=1_000_000)
         sim.events.on(SimEvents.ACTION_FAILED, self._on_action_end, priority=1_000_000)
 
@@ -224,15 +227,19 @@ class Runtime:
             return
         waiter.done = True
         self.runnable += 1  # the cancelled task runs again
-        if waiter.bucket is not None and waiter in waiter.bucket:
-            waiter.bucket.remove(waiter)
-        if waiter.kind == "action":
-            action = waiter.target
-            self._actions.pop(id(action), None)
-            if not action.is_complete():
-                action.cancel()
         if waiter.on_abort is not None:
-            waiter.on_abort()
+            waiter.on_abort(waiter)
+
+    def _undo_timer(self, waiter: Waiter) -> None:
+        bucket = waiter.target
+        if waiter in bucket:
+            bucket.remove(waiter)
+
+    def _undo_action(self, waiter: Waiter) -> None:
+        action = waiter.target
+        self._actions.pop(id(action), None)
+        if not action.is_complete():
+            action.cancel()
 
     def wake(self, waiter: Waiter, value: Any = None, error: BaseException | None = None) -> None:
         """Resume ``waiter`` now (counted at once)."""
@@ -372,7 +379,7 @@ class Runtime:
             return anyio.lowlevel.checkpoint()
         waiter = Waiter(mission, "timer")
         bucket = self._timers.setdefault(self.sim.step_count + steps, [])
-        waiter.bucket = bucket  # no per-wait closure: aborted() takes it out of the bucket
+        waiter.target, waiter.on_abort = bucket, self._on_timer_abort
         bucket.append(waiter)
         return self.park(waiter)
 
@@ -390,7 +397,7 @@ class Runtime:
         if key in self._actions:
             raise RuntimeError(f"{what}: another mission is already waiting on this action")
         waiter = Waiter(mission, "action")
-        waiter.target = action  # no per-wait closure: aborted() undoes "action" waits
+        waiter.target, waiter.on_abort = action, self._on_action_abort
         self._actions[key] = waiter
         return self.park(waiter)
 
@@ -415,7 +422,7 @@ class Runtime:
         waiter = Waiter(mission, "condition")
         key = id(waiter)
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             self._conditions.pop(key, None)
 
         waiter.on_abort = undo
@@ -433,7 +440,7 @@ class Runtime:
             self._event_handlers[name] = handler
             self.sim.events.on(name, handler, priority=1_000_000)
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             table.pop(key, None)
 
         waiter.on_abort = undo

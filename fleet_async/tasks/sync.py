@@ -69,7 +69,7 @@ class Event:
         waiter = Waiter(mission, "sync")
         key = id(waiter)
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             self._waiters.pop(key, None)
 
         waiter.on_abort = undo
@@ -107,7 +107,7 @@ class Resource:
         waiter = Waiter(mission, "sync")
         entry = (float(priority), next(self._seq), waiter)
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             if entry in self._queue:
                 self._queue.remove(entry)
                 heapq.heapify(self._queue)
@@ -170,7 +170,7 @@ class Store:
         waiter = Waiter(mission, "sync")
         entry = (waiter, item)
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             if entry in self._putters:
                 self._putters.remove(entry)
 
@@ -189,7 +189,7 @@ class Store:
         waiter = Waiter(mission, "sync")
         getter = (waiter, filter)
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             if getter in self._getters:
                 self._getters.remove(getter)
 
@@ -267,7 +267,7 @@ class EventStream:
         runtime = _runtime(self._sim, "EventStream")
         waiter = Waiter(runtime.current("sim.events.stream"), "event")
 
-        def undo() -> None:
+        def undo(_: Waiter) -> None:
             self._waiter = None
 
         waiter.on_abort = undo
