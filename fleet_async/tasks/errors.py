@@ -7,6 +7,9 @@ from typing import Any
 __all__ = [
     "ActionCancelledError",
     "ActionFailedError",
+    "Cancelled",
+    "Interrupt",
+    "MissionCancelledError",
     "MissionDeadlockError",
     "MissionError",
     "MissionStalledError",
@@ -16,6 +19,41 @@ __all__ = [
 
 class MissionError(Exception):
     """Base class of mission-layer errors."""
+
+
+class Cancelled(BaseException):  # named like trio's and anyio's cancellation
+    """Thrown into a mission whose cancel scope was cancelled (a sim-time timeout, a task
+    group that failed, a lost race, ``mission.cancel()``).
+
+    It is a BaseException, so ``except Exception`` does not swallow it; let it propagate
+    (clean up in ``finally``). The scope that was cancelled catches it. Inside missions this is
+    the cancellation to expect, on every backend: ``anyio.get_cancelled_exc_class()`` names
+    the host event loop's own, which missions never see.
+    """
+
+
+class Interrupt(Exception):  # SimPy's name for it
+    """Raised inside a mission by ``mission.interrupt(cause)``; the mission may catch it and
+    go on (an awaited action was cancelled, its robot stopped).
+
+    Attributes:
+        cause: What the interrupter passed.
+    """
+
+    def __init__(self, cause: Any = None) -> None:
+        super().__init__(cause)
+
+    @property
+    def cause(self) -> Any:
+        """The interrupter's cause."""
+        return self.args[0]
+
+    def __str__(self) -> str:
+        return f"Interrupt({self.cause!r})"
+
+
+class MissionCancelledError(MissionError):
+    """Joining a mission that was cancelled (it has no result)."""
 
 
 class ActionFailedError(MissionError):

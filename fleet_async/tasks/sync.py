@@ -1,252 +1,119 @@
-"""Sim-aware synchronisation between missions: Event, Resource / Lock and Store.
+"""Sim-aware Event and EventStream.
 
-They behave like their anyio / SimPy counterparts but park missions the way every sim-time
-await does, so waking follows the mission-key order and the run stays deterministic. A waiter
-that is cancelled (a timeout, a lost race) leaves the queue without taking anything.
+``Event(sim)`` is a one-shot event in sim time (anyio's ``set`` / ``is_set`` / ``wait``, and
+SimPy's ``succeed(value)`` / ``fail(exc)`` / ``value``): awaiting it returns its value. Setting it
+schedules it at the current step; its waiters resume, in the order they started waiting, when
+the kernel processes it. It may be created before the run and set from outside the missions
+(a callback, another task of the host loop).
 
-    charger = Resource(sim, capacity=2)
-    async with charger.request(priority=0):
-        await robot.charge(30.0)
+``sim.events.stream(name)`` is an async iterator over the simulation's bus events.
 """
 
 from __future__ import annotations
 
-import heapq
-import itertools
-import math
 from collections import deque
-from collections.abc import AsyncIterator, Callable
-from contextlib import asynccontextmanager
-from typing import TYPE_CHECKING, Any, cast
+from collections.abc import Callable, Generator
+from typing import Any
 
-from fleet_async.tasks.parking import Waiter
+from fleet_async.tasks.kernel import PENDING, Kernel, SimEvent, kernel_of
 
-if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
-    from fleet_async.tasks.runtime import Runtime
-
-__all__ = ["Event", "EventStream", "Lock", "Resource", "Store"]
+__all__ = ["Event", "EventStream"]
 
 
-def _runtime(sim: MultiRobotSimulationCore, what: str) -> Runtime:
-    runtime = sim.mission_runtime
-    if runtime is None:
-        raise RuntimeError(
-            f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
-        )
-    return cast("Runtime", runtime)  # the only MissionRuntime there is
+class Event(SimEvent):
+    """A one-shot event missions can wait for.
 
-
-class Event:
-    """A flag missions can wait for; ``set`` wakes every waiter (in mission-key order)."""
-
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
-        self._sim = sim
-        self._set = False
-        self._waiters: dict[int, Waiter] = {}
-
-    def is_set(self) -> bool:
-        """Whether the event has been set."""
-        return self._set
-
-    def set(self) -> None:
-        """Set the flag and wake every waiting mission."""
-        if self._set:
-            return
-        self._set = True
-        waiters, self._waiters = list(self._waiters.values()), {}
-        if waiters:  # only a running mission can have parked here
-            runtime = _runtime(self._sim, "Event.set")
-            for waiter in waiters:
-                runtime.schedule_wake(waiter)
-
-    async def wait(self) -> None:
-        """Wait until the event is set (returns at once if it is)."""
-        runtime = _runtime(self._sim, "Event.wait")
-        mission = runtime.current("Event.wait")
-        if self._set:
-            return
-        waiter = Waiter(mission, "sync")
-        key = id(waiter)
-
-        def undo(_: Waiter) -> None:
-            self._waiters.pop(key, None)
-
-        waiter.on_abort = undo
-        self._waiters[key] = waiter
-        await runtime.park(waiter)
-
-
-class Resource:
-    """``capacity`` slots handed out by priority (lower first), then request order.
-
-    Use ``async with resource.request(priority=...)`` or ``await acquire`` / ``release``.
+    Args:
+        sim: The simulation whose runs the event belongs to.
     """
 
-    def __init__(self, sim: MultiRobotSimulationCore, capacity: int = 1) -> None:
-        if isinstance(capacity, bool) or not isinstance(capacity, int) or capacity < 1:
-            raise ValueError(f"Resource.capacity: expected an integer >= 1, got {capacity!r}")
+    __slots__ = ("_sim",)
+
+    def __init__(self, sim: Any) -> None:
+        runtime = sim.mission_runtime
+        super().__init__(runtime.kernel if runtime is not None else _NO_KERNEL)
         self._sim = sim
-        self.capacity = capacity
-        self.in_use = 0
-        self._queue: list[tuple[float, int, Waiter]] = []
-        self._seq = itertools.count()
 
-    @property
-    def queued(self) -> int:
-        """Missions waiting for a slot."""
-        return len(self._queue)
+    def _bind(self, what: str) -> Kernel:
+        kernel = kernel_of(self._sim, what)
+        if self.kernel is not kernel:  # made before this run (or in an earlier one)
+            self.kernel = kernel
+            if self.raw_value is not PENDING:
+                self.callbacks = None  # set back then: it counts as processed
+            elif self.callbacks is None or self.callbacks:
+                self.callbacks = []
+        return kernel
 
-    async def acquire(self, priority: float = 0.0) -> None:
-        """Take a slot, waiting for one if all are in use."""
-        runtime = _runtime(self._sim, "Resource.acquire")
-        mission = runtime.current("Resource.acquire")
-        if self.in_use < self.capacity and not self._queue:
-            self.in_use += 1
+    def is_set(self) -> bool:
+        """Whether it has been set (succeeded)."""
+        return self.raw_value is not PENDING and self.ok
+
+    def set(self, value: Any = None) -> None:
+        """Set it (again: no effect); its waiters resume at the current step, in order."""
+        if self.raw_value is not PENDING:
             return
-        waiter = Waiter(mission, "sync")
-        entry = (float(priority), next(self._seq), waiter)
+        self.succeed(value)
 
-        def undo(_: Waiter) -> None:
-            if entry in self._queue:
-                self._queue.remove(entry)
-                heapq.heapify(self._queue)
-
-        waiter.on_abort = undo
-        heapq.heappush(self._queue, entry)
-        await runtime.park(waiter)  # the slot was handed over by release()
-
-    def release(self) -> None:
-        """Give a slot back; the next waiter (by priority, then order) gets it.
+    def succeed(self, value: Any = None) -> Event:
+        """Trigger it with ``value``.
 
         Raises:
-            RuntimeError: if no slot is held.
+            RuntimeError: if it was triggered already.
         """
-        if self.in_use <= 0:
-            raise RuntimeError("Resource.release: no slot is held")
-        if self._queue:
-            _, _, waiter = heapq.heappop(self._queue)
-            _runtime(self._sim, "Resource.release").schedule_wake(waiter)  # slot passes on
-        else:
-            self.in_use -= 1
+        if self._sim.mission_runtime is None:  # no run: nobody can be waiting
+            if self.raw_value is not PENDING:
+                raise RuntimeError(f"{self!r} has already been triggered")
+            self.ok, self.raw_value, self.callbacks = True, value, None
+            return self
+        self._bind("Event.succeed")
+        super().succeed(value)
+        return self
 
-    @asynccontextmanager
-    async def request(self, priority: float = 0.0) -> AsyncIterator[Resource]:
-        """``async with resource.request():`` holds a slot for the block."""
-        await self.acquire(priority)
-        try:
-            yield self
-        finally:
-            self.release()
+    def fail(self, exception: BaseException) -> Event:
+        """Trigger it with an exception, which its waiters raise."""
+        self._bind("Event.fail")
+        super().fail(exception)
+        return self
+
+    def wait(self) -> Event:
+        """``await event.wait()``: wait until it is set (returns its value)."""
+        return self
+
+    def __await__(self) -> Generator[Any, Any, Any]:
+        kernel = self._bind("Event.wait")
+        if kernel.current is None:
+            raise kernel.outside_error("Event.wait")
+        return (yield self)
 
 
-class Lock(Resource):
-    """A Resource with one slot: ``async with lock.request():``."""
-
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
-        super().__init__(sim, capacity=1)
+class _NoKernel(Kernel):
+    """Stands in for the kernel of an Event made outside a run."""
 
 
-class Store:
-    """A FIFO of items: ``await put(item)`` (waits while full), ``await get(filter)``."""
-
-    def __init__(self, sim: MultiRobotSimulationCore, capacity: float = math.inf) -> None:
-        if not capacity >= 1:
-            raise ValueError(f"Store.capacity: expected a number >= 1, got {capacity!r}")
-        self._sim = sim
-        self.capacity = capacity
-        self.items: deque[Any] = deque()
-        self._getters: list[tuple[Waiter, Callable[[Any], bool] | None]] = []
-        self._putters: deque[tuple[Waiter, Any]] = deque()
-
-    async def put(self, item: Any) -> None:
-        """Add ``item``, waiting while the store is full."""
-        runtime = _runtime(self._sim, "Store.put")
-        mission = runtime.current("Store.put")
-        if len(self.items) < self.capacity:
-            self.items.append(item)
-            self._serve(runtime)
-            return
-        waiter = Waiter(mission, "sync")
-        entry = (waiter, item)
-
-        def undo(_: Waiter) -> None:
-            if entry in self._putters:
-                self._putters.remove(entry)
-
-        waiter.on_abort = undo
-        self._putters.append(entry)
-        await runtime.park(waiter)
-
-    async def get(self, filter: Callable[[Any], bool] | None = None) -> Any:
-        """Take the oldest item (matching ``filter``), waiting until there is one."""
-        runtime = _runtime(self._sim, "Store.get")
-        mission = runtime.current("Store.get")
-        item = self._take(filter)
-        if item is not _NOTHING:
-            self._admit_putters(runtime)
-            return item
-        waiter = Waiter(mission, "sync")
-        getter = (waiter, filter)
-
-        def undo(_: Waiter) -> None:
-            if getter in self._getters:
-                self._getters.remove(getter)
-
-        waiter.on_abort = undo
-        self._getters.append(getter)
-        return await runtime.park(waiter)
-
-    def _take(self, filter: Callable[[Any], bool] | None) -> Any:
-        for i, item in enumerate(self.items):
-            if filter is None or filter(item):
-                del self.items[i]
-                return item
-        return _NOTHING
-
-    def _serve(self, runtime: Runtime) -> None:
-        """Hand items to waiting getters, oldest getter first."""
-        for entry in list(self._getters):
-            waiter, flt = entry
-            item = self._take(flt)
-            if item is _NOTHING:
-                continue
-            self._getters.remove(entry)
-            runtime.schedule_wake(waiter, item)
-        self._admit_putters(runtime)
-
-    def _admit_putters(self, runtime: Runtime) -> None:
-        admitted = False
-        while self._putters and len(self.items) < self.capacity:
-            waiter, item = self._putters.popleft()
-            self.items.append(item)
-            runtime.schedule_wake(waiter)
-            admitted = True
-        if admitted and self._getters:
-            self._serve(runtime)
+_NO_KERNEL = _NoKernel()
 
 
 class EventStream:
-    """``async for payload in sim.events.stream(name, where=...)``: every matching event, in
-    order, from subscription until ``close()`` (or leaving an ``async with`` block)."""
+    """``async for payload in sim.events.stream(name, where=...)``: every matching bus event,
+    in order, from subscription until ``close()`` (or leaving an ``async with`` block)."""
 
-    def __init__(
-        self, sim: MultiRobotSimulationCore, name: str, where: Callable[..., bool] | None
-    ) -> None:
-        self._sim = sim
+    def __init__(self, runtime: Any, name: str, where: Callable[..., bool] | None) -> None:
+        self._runtime = runtime
         self._name = name
         self._where = where
         self._buffer: deque[dict[str, Any]] = deque()
-        self._waiter: Waiter | None = None
+        self._waiter: SimEvent | None = None
         self._closed = False
-        sim.events.on(name, self._on_event, priority=1_000_000)
+        runtime.sim.events.on(name, self._on_event, priority=1_000_000)
 
     def _on_event(self, **payload: Any) -> None:
         if self._where is not None and not self._where(**payload):
             return
-        if self._waiter is not None and not self._waiter.done:
-            waiter, self._waiter = self._waiter, None
-            _runtime(self._sim, "EventStream").schedule_wake(waiter, dict(payload))
+        waiter = self._waiter
+        if waiter is not None:
+            self._waiter = None
+            self._runtime.streams_waiting -= 1
+            waiter.succeed(dict(payload))
         else:
             self._buffer.append(dict(payload))
 
@@ -254,7 +121,7 @@ class EventStream:
         """Stop listening."""
         if not self._closed:
             self._closed = True
-            self._sim.events.off(self._name, self._on_event)
+            self._runtime.sim.events.off(self._name, self._on_event)
 
     def __aiter__(self) -> EventStream:
         return self
@@ -264,16 +131,17 @@ class EventStream:
             return self._buffer.popleft()
         if self._closed:
             raise StopAsyncIteration
-        runtime = _runtime(self._sim, "EventStream")
-        waiter = Waiter(runtime.current("sim.events.stream"), "event")
-
-        def undo(_: Waiter) -> None:
-            self._waiter = None
-
-        waiter.on_abort = undo
+        waiter = _StreamWait(self._runtime.kernel, self)
         self._waiter = waiter
-        payload: dict[str, Any] = await runtime.park(waiter)
+        self._runtime.streams_waiting += 1
+        payload: dict[str, Any] = await waiter
         return payload
+
+    def abandon(self, waiter: SimEvent) -> None:
+        """Its waiting mission gave up (cancelled or interrupted)."""
+        if self._waiter is waiter:
+            self._waiter = None
+            self._runtime.streams_waiting -= 1
 
     async def __aenter__(self) -> EventStream:
         return self
@@ -282,4 +150,12 @@ class EventStream:
         self.close()
 
 
-_NOTHING = object()
+class _StreamWait(SimEvent):
+    __slots__ = ("_stream",)
+
+    def __init__(self, kernel: Kernel, stream: EventStream) -> None:
+        super().__init__(kernel)
+        self._stream = stream
+
+    def abandon(self, mission: Any) -> None:
+        self._stream.abandon(self)

@@ -26,7 +26,6 @@ from fleet_async import (
     WaitAction,
 )
 from fleet_async.tasks import Event
-from fleet_async.tasks.parking import Waiter
 
 if sys.version_info < (3, 11):
     from exceptiongroup import BaseExceptionGroup
@@ -82,7 +81,7 @@ async def test_nested_timeouts_and_shield(fleet_sim):
         with fleet_sim.move_on_after(0.5) as inner:
             await fleet_sim.sleep(3.0)
         assert inner.cancelled_caught and fleet_sim.step_count == 5
-        with anyio.CancelScope(shield=True):
+        with fleet_sim.cancel_scope(shield=True):
             await fleet_sim.sleep(1.0)  # shielded: runs past the outer deadline
         assert fleet_sim.step_count == 15
         await fleet_sim.sleep(1.0)
@@ -283,9 +282,8 @@ def test_deadlock_is_an_error_not_a_hang(backend):
     with _sim() as sim:
 
         async def stuck():
-            # Parks on a mission-to-mission wait that nothing will ever release.
-            runtime = sim.mission_runtime
-            await runtime.park(Waiter(runtime.current("test"), "sync"))
+            # Waits on a sim Event that nothing will ever set.
+            await fa.Event(sim).wait()
 
         async def main():
             async with sim.task_group() as tg:

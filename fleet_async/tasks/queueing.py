@@ -1,0 +1,138 @@
+"""What Resource, Container and Store share: put and get requests served in queue order.
+
+A request is an event. Creating one queues it and serves what can be served at once; a served
+request is *triggered* (scheduled), and its waiter resumes when the kernel processes it, so
+even a free resource makes the requester yield once, as SimPy does. When a put request is
+processed, waiting gets are served again, and the other way round: a release hands the slot on
+when the kernel processes it, and the new holder resumes when its own grant is processed.
+
+A request made in a ``with`` block is withdrawn when the block is left before it was served,
+so a mission that gives up waiting (a timeout, an interrupt) leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+from types import TracebackType
+from typing import Any
+
+from fleet_async.tasks.kernel import SimEvent, kernel_of
+
+__all__ = ["GetRequest", "PutRequest", "Queueing"]
+
+
+class Queueing:
+    """Put and get queues, served by the subclass's ``try_put`` / ``try_get``.
+
+    ``try_put(request)`` / ``try_get(request)`` trigger the request if it can be served now,
+    and return whether to go on trying later requests of the same queue.
+
+    Args:
+        sim: The simulation whose runs serve the requests.
+    """
+
+    def __init__(self, sim: Any) -> None:
+        self.sim = sim
+        self.put_queue: list[PutRequest] = []
+        """Put requests not served yet, in serving order."""
+        self.get_queue: list[GetRequest] = []
+        """Get requests not served yet, in serving order."""
+
+    def try_put(self, request: Any) -> bool:
+        """Serve ``request`` if possible; return whether to try the next put too."""
+        raise NotImplementedError
+
+    def try_get(self, request: Any) -> bool:
+        """Serve ``request`` if possible; return whether to try the next get too."""
+        raise NotImplementedError
+
+    def add_put(self, request: PutRequest) -> None:
+        """Queue a new put request (in serving order)."""
+        self.put_queue.append(request)
+
+    def serve_puts(self, _: SimEvent | None = None) -> None:
+        """Serve waiting puts in queue order (a get was processed, or a put was made)."""
+        queue = self.put_queue
+        i = 0
+        while i < len(queue):
+            request = queue[i]
+            proceed = self.try_put(request)
+            if request.triggered:
+                del queue[i]
+            else:
+                i += 1
+            if not proceed:
+                break
+
+    def serve_gets(self, _: SimEvent | None = None) -> None:
+        """Serve waiting gets in queue order (a put was processed, or a get was made)."""
+        queue = self.get_queue
+        i = 0
+        while i < len(queue):
+            request = queue[i]
+            proceed = self.try_get(request)
+            if request.triggered:
+                del queue[i]
+            else:
+                i += 1
+            if not proceed:
+                break
+
+
+class _Request(SimEvent):
+    __slots__ = ("mission", "owner")
+
+    def __init__(self, owner: Queueing, what: str) -> None:
+        kernel = kernel_of(owner.sim, what)
+        super().__init__(kernel)
+        self.owner = owner
+        self.mission = kernel.current
+        """The mission that made the request (None from outside the missions)."""
+
+    def __enter__(self) -> Any:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.cancel()
+
+    def cancel(self) -> None:
+        """Withdraw the request if it has not been served yet."""
+        raise NotImplementedError
+
+
+class PutRequest(_Request):
+    """A request to put into a Queueing (a resource request, a store or container put)."""
+
+    __slots__ = ()
+
+    def __init__(self, owner: Queueing, what: str) -> None:
+        super().__init__(owner, what)
+        owner.add_put(self)
+        self.callbacks.append(owner.serve_gets)  # type: ignore[union-attr]  # a fresh event
+        owner.serve_puts()
+
+    def cancel(self) -> None:
+        """Withdraw the request if it has not been served yet."""
+        if not self.triggered and self in self.owner.put_queue:
+            self.owner.put_queue.remove(self)
+
+
+class GetRequest(_Request):
+    """A request to get from a Queueing (a release, a store or container get)."""
+
+    __slots__ = ()
+
+    def __init__(self, owner: Queueing, what: str) -> None:
+        super().__init__(owner, what)
+        owner.get_queue.append(self)
+        self.callbacks.append(owner.serve_puts)  # type: ignore[union-attr]  # a fresh event
+        owner.serve_gets()
+
+    def cancel(self) -> None:
+        """Withdraw the request if it has not been served yet."""
+        if not self.triggered and self in self.owner.get_queue:
+            self.owner.get_queue.remove(self)

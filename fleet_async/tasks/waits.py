@@ -1,0 +1,149 @@
+"""Waits that the step loop ends: actions, predicates checked after each step, bus events.
+
+``agent.move(...)`` (and pick, drop, wait, charge, move_joints, reach_pose, submit) queues an
+action at once and returns an :class:`ActionWait`: an event that succeeds with the action when
+it completes, or fails with ActionFailedError / ActionCancelledError. Actions that end during a
+step resume their missions at the step's end, before anything else due then but starts and
+interrupts, in agent order (the STEP class). A mission that stops waiting on one because it
+was cancelled or interrupted cancels the action (a queued one is dropped, a running one stops
+its robot in that step), unless another mission still waits on it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from fleet_async.core import ActionStatus, MoveAction, WaitAction
+from fleet_async.tasks.errors import ActionCancelledError, ActionFailedError
+from fleet_async.tasks.kernel import SimEvent
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from fleet_async.tasks.runtime import Runtime
+
+__all__ = ["ActionWait", "BusWait", "PredicateWait", "action_error"]
+
+
+def action_error(action: Any) -> BaseException | None:
+    """What awaiting ``action`` raises once it has ended (None when it completed)."""
+    if action.status is ActionStatus.FAILED:
+        return ActionFailedError(action)
+    if action.status is ActionStatus.CANCELLED:
+        return ActionCancelledError(action)
+    return None
+
+
+class ActionWait(SimEvent):
+    """A queued action, as an event and a handle: ``await`` it, ``cancel()`` it, watch its
+    ``status``, ``phase`` and ``progress``."""
+
+    __slots__ = ("_runtime", "action", "agent")
+
+    def __init__(self, runtime: Runtime, agent: Any, action: Any) -> None:
+        super().__init__(runtime.kernel)
+        self._runtime = runtime
+        self.agent = agent
+        self.action = action
+        if action.is_complete():
+            self.settle(in_step=False)
+        else:
+            runtime.action_waits[id(action)] = self
+
+    def settle(self, in_step: bool) -> None:
+        """The action ended: trigger with its outcome (ordered as a step outcome if it ended
+        during a step)."""
+        error = action_error(self.action)
+        if error is None:
+            self.ok, self.raw_value = True, self.action
+        else:
+            self.ok, self.raw_value = False, error
+        if in_step:
+            self._runtime.outcome(self)
+        else:
+            self.kernel.schedule(self)
+
+    def abandon(self, mission: Any) -> None:
+        if self.callbacks or self.action.is_complete():
+            return  # another mission still waits on it, or it is over
+        self._runtime.action_waits.pop(id(self.action), None)
+        self.action.cancel()
+
+    # ----- the handle -----------------------------------------------------------------------
+
+    @property
+    def status(self) -> ActionStatus:
+        """The action's status."""
+        status: ActionStatus = self.action.status
+        return status
+
+    @property
+    def done(self) -> bool:
+        """Whether the action has ended."""
+        return bool(self.action.is_complete())
+
+    @property
+    def phase(self) -> Any:
+        """The pick / drop phase, or None for actions without phases."""
+        return getattr(self.action, "phase", None)
+
+    @property
+    def progress(self) -> float:
+        """Rough completion in [0, 1]: waypoints reached for moves, time spent for waits."""
+        action = self.action
+        if action.is_complete():
+            return 1.0
+        if action.start_time is None:
+            return 0.0
+        if isinstance(action, WaitAction):
+            if action.duration <= 0:
+                return 0.0
+            now = self._runtime.sim.sim_time
+            return float(min(1.0, (now - action.start_time) / action.duration))
+        if isinstance(action, MoveAction):
+            total = len(action.path)
+            return min(1.0, self.agent.current_waypoint_index / total) if total else 0.0
+        return 0.0
+
+    def cancel(self) -> None:
+        """Cancel the action (a queued one is dropped, a running one stops its robot now)."""
+        self.action.cancel()
+
+    def __repr__(self) -> str:
+        return f"<ActionWait {type(self.action).__name__} {self.action.status.value}>"
+
+
+class PredicateWait(SimEvent):
+    """``sim.wait_until(predicate)``: succeeds after the first step at whose end the
+    predicate holds."""
+
+    __slots__ = ("_runtime", "predicate")
+
+    def __init__(self, runtime: Runtime, predicate: Callable[[], bool]) -> None:
+        super().__init__(runtime.kernel)
+        self._runtime = runtime
+        self.predicate = predicate
+        if predicate():
+            self.succeed()
+        else:
+            runtime.predicates[id(self)] = self
+
+    def abandon(self, mission: Any) -> None:
+        self._runtime.predicates.pop(id(self), None)
+
+
+class BusWait(SimEvent):
+    """``sim.events.wait(name, where)``: succeeds with the payload (a dict) of the next
+    ``name`` event that ``where(**payload)`` accepts."""
+
+    __slots__ = ("_runtime", "name", "where")
+
+    def __init__(self, runtime: Runtime, name: str, where: Callable[..., bool] | None) -> None:
+        super().__init__(runtime.kernel)
+        self._runtime = runtime
+        self.name = name
+        self.where = where
+        runtime.add_bus_wait(self)
+
+    def abandon(self, mission: Any) -> None:
+        self._runtime.bus_waits.get(self.name, {}).pop(id(self), None)
