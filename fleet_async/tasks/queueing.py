@@ -45,6 +45,10 @@ class Queueing:
         """Serve ``request`` if possible; return whether to try the next get too."""
         raise NotImplementedError
 
+    def restore(self, request: GetRequest) -> None:
+        """Give back what a served get took, when its only waiter gave up before resuming
+        (nothing to give back by default)."""
+
     def add_put(self, request: PutRequest) -> None:
         """Queue a new put request (in serving order)."""
         self.put_queue.append(request)
@@ -120,6 +124,13 @@ class PutRequest(_Request):
         if not self.triggered and self in self.owner.put_queue:
             self.owner.put_queue.remove(self)
 
+    def abandon(self, mission: Any) -> None:
+        """Its waiting mission was cancelled or interrupted: withdraw it if nobody else waits
+        on it and it has not been served (a granted slot is released by the ``with`` block
+        or ``acquire`` that holds it)."""
+        if self.callbacks is not None and len(self.callbacks) == 1:  # only serve_gets left
+            self.cancel()
+
 
 class GetRequest(_Request):
     """A request to get from a Queueing (a release, a store or container get)."""
@@ -136,3 +147,13 @@ class GetRequest(_Request):
         """Withdraw the request if it has not been served yet."""
         if not self.triggered and self in self.owner.get_queue:
             self.owner.get_queue.remove(self)
+
+    def abandon(self, mission: Any) -> None:
+        """Its waiting mission was cancelled or interrupted: if nobody else waits on it,
+        withdraw it, or give back what it took if it was served already (nothing is lost)."""
+        if self.callbacks is None or len(self.callbacks) != 1:  # only serve_puts left
+            return
+        if not self.triggered:
+            self.cancel()
+        elif self.ok:
+            self.owner.restore(self)

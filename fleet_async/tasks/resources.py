@@ -315,6 +315,11 @@ class Container(Queueing):
             return True
         return False
 
+    def restore(self, request: ContainerGet) -> None:  # type: ignore[override]  # its own gets
+        """Put back the amount a cancelled get took, and serve the gets again."""
+        self._level += request.amount
+        self.serve_gets()
+
     def try_get(self, request: ContainerGet) -> bool:
         """Take the amount if there is that much; go on only if it did."""
         if self._level >= request.amount:

@@ -80,6 +80,11 @@ class Store(Queueing):
                 break
         return True
 
+    def restore(self, request: StoreGet) -> None:  # type: ignore[override]  # its own gets
+        """Put the item a cancelled get took back in front, and serve the gets again."""
+        self.items.insert(0, request.raw_value)
+        self.serve_gets()
+
     def _add(self, item: Any) -> None:
         self.items.append(item)
 
@@ -118,6 +123,11 @@ class PriorityStore(Store):
         if self.items:
             request.succeed(heapq.heappop(self.items))
         return False
+
+    def restore(self, request: StoreGet) -> None:  # type: ignore[override]  # its own gets
+        """Put the item a cancelled get took back, and serve the gets again."""
+        heapq.heappush(self.items, request.raw_value)
+        self.serve_gets()
 
     def _add(self, item: Any) -> None:
         heapq.heappush(self.items, item)
