@@ -7,8 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from fleet_async.core import geometry, pose, quaternions, waypoints
-from fleet_async.core.geometry import as_axes, clamp_vec_to_limit, is_scalar, projected_axis_limit
+from fleet_async.core.geometry import limits as geometry
+from fleet_async.core.geometry import pose, quaternions, waypoints
+from fleet_async.core.geometry.limits import (
+    as_axes,
+    clamp_vec_to_limit,
+    is_scalar,
+    projected_axis_limit,
+)
 
 S2 = math.sqrt(0.5)
 

@@ -11,8 +11,8 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from fleet_async.core.geometry import Pose
-from fleet_async.core.tools import (
+from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.world.tools import (
     body_to_world_velocity_2d,
     body_to_world_velocity_3d,
     calculate_offset_pose,
