@@ -331,6 +331,11 @@ class SimObject:
     def update(self, dt: float) -> None:
         """Per-step behaviour; subclasses override it and the simulation calls it each step."""
 
+    def overrides_update(self) -> bool:
+        """Whether this object's class overrides :meth:`update` (the simulation then calls it
+        every step; objects that do not cost nothing)."""
+        return type(self).update is not SimObject.update
+
     def register_callback(
         self, callback: Callable[[SimObject, float], Any], frequency: float = 0.25
     ) -> None:

@@ -16,14 +16,17 @@ import tempfile
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pybullet as p
 import pybullet_data
 
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.world.shapes import clear_shape_cache, forget_body_shape
 from fleet_async.core.world.state import KinematicState
+
+if TYPE_CHECKING:
+    from fleet_async.core.sim.params import SimulationParams
 
 __all__ = ["PyBulletBackend", "display_available", "native_output_logged"]
 

@@ -16,7 +16,6 @@ import pybullet as p
 
 from fleet_async.core.base.events import EventBus, SimEvents
 from fleet_async.core.base.types import CollisionMode
-from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.geometry.limits import Pose
 from fleet_async.core.world.attachments import Attachment, AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
@@ -24,6 +23,7 @@ from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 from fleet_async.core.world.tools import resolve_link_index
 
 if TYPE_CHECKING:
+    from fleet_async.core.bodies.sim_object import SimObject
     from fleet_async.core.sim.kernel import MultiRobotSimulationCore
 
 __all__ = ["World"]
@@ -159,7 +159,7 @@ class World:
         self._objects[object_id] = obj
         if obj.is_agent:
             self._agents[object_id] = obj
-        if type(obj).update is not SimObject.update:
+        if obj.overrides_update():
             self._updaters[object_id] = obj
         if obj.has_callbacks():
             self._with_callbacks[object_id] = obj
