@@ -16,7 +16,7 @@ from fleet_async.core.actions.action import (
 from fleet_async.core.actions.arm_actions import JointAction, PoseAction
 from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.agents.agent import Agent
-from fleet_async.core.agents.agent_params import AgentSpawnParams, IKParams
+from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin
 from fleet_async.core.base.config_utils import (
     dataclass_from_dict,
@@ -72,6 +72,7 @@ from fleet_async.core.motion.controllers import (
     create_controller,
     register_controller,
 )
+from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.scenario.world_loader import WorldLoadError, WorldLoadFailure
 from fleet_async.core.sim.kernel import MultiRobotSimulationCore
 from fleet_async.core.sim.params import SimulationParams

@@ -19,7 +19,7 @@ import pybullet as p
 
 from fleet_async.core.actions.action import Action
 from fleet_async.core.agents.agent_joints import AgentJointsApi
-from fleet_async.core.agents.agent_params import AgentSpawnParams, IKParams
+from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin, create_agent_plugin
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionMode, MotionMode, MovementDirection, coerce_enum
@@ -37,6 +37,7 @@ from fleet_async.core.motion.controllers import (
     build_controller_chain,
     create_controller,
 )
+from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.motion.joints import JointSet
 
 if TYPE_CHECKING:

@@ -1,4 +1,5 @@
-"""AgentSpawnParams and IKParams: what it takes to create an Agent."""
+"""AgentSpawnParams: what it takes to create an Agent (IKParams, its IK part, lives with the
+solver in ``motion/ik.py`` and is re-exported here)."""
 
 from __future__ import annotations
 
@@ -8,50 +9,9 @@ from typing import Any
 from fleet_async.core.base.config_utils import dataclass_from_dict
 from fleet_async.core.base.types import MotionMode, coerce_enum
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.motion.ik import IKParams
 
 __all__ = ["AgentSpawnParams", "IKParams"]
-
-
-@dataclass
-class IKParams:
-    """Inverse-kinematics solver settings (multi-seed, iterative).
-
-    Attributes:
-        max_outer_iterations: Refinement iterations per seed.
-        convergence_threshold: m; accept a solution this close early.
-        max_inner_iterations: ``maxNumIterations`` for pybullet.calculateInverseKinematics.
-        residual_threshold: ``residualThreshold`` for pybullet.calculateInverseKinematics.
-        reachability_tolerance: m; ``move_end_effector`` reports reachable within this.
-        seed_quartiles: Joint-range fractions for the rest-pose seeds.
-        ik_joint_names: Joints IK may move (others locked); None = automatic.
-    """
-
-    max_outer_iterations: int = 5
-    convergence_threshold: float = 0.01
-    max_inner_iterations: int = 200
-    residual_threshold: float = 0.0001
-    reachability_tolerance: float = 0.02
-    seed_quartiles: tuple[float, ...] = (0.25, 0.5, 0.75)
-    ik_joint_names: tuple[str, ...] | None = None
-
-    def __post_init__(self) -> None:
-        for name in ("max_outer_iterations", "max_inner_iterations"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"IKParams.{name}: expected an integer >= 1, got {value!r}")
-        for name in ("convergence_threshold", "residual_threshold", "reachability_tolerance"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-                raise ValueError(f"IKParams.{name}: expected a number > 0, got {value!r}")
-        quartiles = tuple(float(q) for q in self.seed_quartiles)
-        if not quartiles or not all(0.0 <= q <= 1.0 for q in quartiles):
-            raise ValueError(
-                "IKParams.seed_quartiles: expected fractions in [0, 1], "
-                f"got {self.seed_quartiles!r}"
-            )
-        self.seed_quartiles = quartiles
-        if self.ik_joint_names is not None:
-            self.ik_joint_names = tuple(str(n) for n in self.ik_joint_names)
 
 
 @dataclass
