@@ -31,8 +31,8 @@ from fleet_async.core.agents.agent import Agent
 from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.base.types import CollisionDetectionMethod
 from fleet_async.core.geometry.limits import Pose
-from fleet_async.core.sim.kernel import MultiRobotSimulationCore
 from fleet_async.core.sim.params import SimulationParams
+from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.world.shapes import ShapeParams
 
 __all__ = [

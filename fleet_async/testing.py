@@ -24,8 +24,8 @@ from typing import Any
 
 import pytest
 
-from fleet_async.core.sim.kernel import MultiRobotSimulationCore
 from fleet_async.core.sim.params import SimulationParams
+from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.tasks.run import run
 
 __all__ = ["fleet_backend", "fleet_sim", "fleet_sim_params", "fleet_sim_until", "run_mission_test"]

@@ -22,7 +22,7 @@ from fleet_async.cli.progress import ProgressBar
 from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
-from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
 

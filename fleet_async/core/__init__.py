@@ -74,9 +74,9 @@ from fleet_async.core.motion.controllers import (
 )
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.scenario.world_loader import WorldLoadError, WorldLoadFailure
-from fleet_async.core.sim.kernel import MultiRobotSimulationCore
 from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin
+from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view.monitor import DataMonitor
 from fleet_async.core.view.recording import SimulationRecorder
 from fleet_async.core.world.shapes import ShapeParams

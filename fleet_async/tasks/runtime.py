@@ -39,7 +39,7 @@ from fleet_async.tasks.parking import Waiter, parker_for_backend
 
 if TYPE_CHECKING:
     from fleet_async.core.actions.action import Action
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.tasks.timeouts import SimTimeout
 
 __all__ = ["Mission", "Runtime"]

@@ -41,7 +41,7 @@ from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.motion.joints import JointSet
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["Agent", "AgentSpawnParams", "IKParams"]
 

@@ -25,7 +25,7 @@ from fleet_async.core.world.tools import resolve_link_index
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["AgentJointsApi"]
 

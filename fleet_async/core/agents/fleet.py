@@ -21,7 +21,7 @@ from fleet_async.core.motion.kinematics import KinematicEngine
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["FleetMotion"]
 

@@ -29,7 +29,7 @@ from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 from fleet_async.core.world.tools import find_nearest
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["ShapeParams", "SimObject", "SimObjectSpawnParams"]
 

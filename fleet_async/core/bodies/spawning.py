@@ -21,7 +21,7 @@ from fleet_async.core.world.shapes import get_or_create_shapes, record_body_shap
 
 if TYPE_CHECKING:
     from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["create_bodies", "wrap_all"]
 

@@ -30,7 +30,7 @@ from fleet_async.core.world.shapes import body_collision_shape
 from fleet_async.core.world.state import COLLISION_CODES
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["CollisionSystem"]
 

@@ -28,7 +28,7 @@ from fleet_async.core.motion.controllers import (
 
 if TYPE_CHECKING:
     from fleet_async.core.actions.action import Action
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["AgentManager"]
 

@@ -37,7 +37,7 @@ from fleet_async.core.managers.grid_spawn import (
 )
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = [
     "ENTITY_REGISTRY",

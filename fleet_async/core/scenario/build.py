@@ -47,7 +47,7 @@ from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = [
     "ACTION_TYPES",

@@ -36,7 +36,7 @@ from fleet_async.core.scenario.errors import (
 from fleet_async.core.world.shapes import ShapeParams
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["ACTION_TYPES", "spawn_entities"]
 

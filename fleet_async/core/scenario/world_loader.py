@@ -45,7 +45,7 @@ from fleet_async.core.world.backend import native_output_logged
 from fleet_async.core.world.shapes import forget_body_shape, record_body_shape
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["WorldLoadError", "WorldLoadFailure", "WorldLoadingApi"]
 

@@ -1,4 +1,4 @@
-"""MultiRobotSimulationCore: the step loop and the objects it moves.
+"""SimulationKernel: the clock, the step loop and the objects it moves.
 
 The step loop is the only clock: ``sim_time == step_count * timestep``. One step runs these
 phases in order, each a call into the module that owns it:
@@ -8,50 +8,51 @@ phases in order, each a call into the module that owns it:
 3. ``agent_update``     - PRE_UPDATE, motion systems and overridden ``update(dt)``, POST_UPDATE.
 4. ``attachments``      - attached objects follow their parent links.
 5. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
-6. ``events_post_step`` - the clock advances, the GUI is synced, POST_STEP event.
+6. ``collision_check``  - the collision pipeline, when due (``collision/``).
+7. ``events_post_step`` - the clock advances, the GUI is synced, POST_STEP event.
 
-Profiling (``return_profiling``), real-time pacing and the monitor wrap this loop
-(``profiling.py``, ``runner.py``, ``monitor.py``); they are not branches inside it.
+Profiling (``return_profiling``, ``profiling.py``) runs the same phases through a timer.
+Real-time pacing, the monitor and GUI input wrap this loop from the layer above (``view/``);
+they are not branches inside it. ``MultiRobotSimulationCore`` (``core/simulation.py``) is this
+kernel plus scenario loading, world loading, recording, the monitor, the GUI and
+``run_simulation``.
 """
 
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
 
 import numpy as np
-import pybullet as p
 
 from fleet_async.core.agents.fleet import FleetMotion
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.scheduling import PeriodicSchedule
-from fleet_async.core.base.types import SpatialHashCellSizeMode, coerce_enum
 from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
 from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
-from fleet_async.core.scenario.build import ScenarioApi
-from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.params import SimulationParams
-from fleet_async.core.sim.plugins import SimPlugin
+from fleet_async.core.sim.plugins import SimPlugin, as_plugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
-from fleet_async.core.view import gui
-from fleet_async.core.view.monitor import DataMonitor, SimulationMonitor
-from fleet_async.core.view.recording import RecordingApi
-from fleet_async.core.view.runner import run_loop
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.state import KinematicState
 from fleet_async.core.world.world import World
 
-__all__ = ["MotionSystem", "MultiRobotSimulationCore"]
+if TYPE_CHECKING:
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = ["MotionSystem", "SimulationKernel"]
 
 logger = logging.getLogger(__name__)
 
 _LOG_LEVELS = {"debug": 10, "info": 20, "warn": 30, "warning": 30, "error": 40, "critical": 50}
+
+_Sim = TypeVar("_Sim", bound="SimulationKernel")
 
 
 class MotionSystem(Protocol):
@@ -61,8 +62,11 @@ class MotionSystem(Protocol):
         """Move every object this system owns by one step of ``dt`` seconds."""
 
 
-class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, RecordingApi):
-    """A multi-robot simulation on one PyBullet client.
+class SimulationKernel(SimMissionApi, CollisionApi):
+    """The clock, the step loop and what it moves (objects, agents, plugins, managers).
+
+    Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
+    adds the layers above; collaborators are handed the simulation as that class.
 
     Args:
         params: Simulation settings (default ``SimulationParams()``).
@@ -86,9 +90,11 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         self.rng = np.random.default_rng(self._params.seed)
         self._backend = PyBulletBackend(self._params)
         self._backend.connect()
-        self._world = World(self, self._backend, self.events, self._params.physics)
-        self._fleet = FleetMotion(self)
-        self._collision = CollisionSystem(self, self._push_dirty)
+        # Collaborators are handed the simulation as the class it is always built as.
+        sim = cast("MultiRobotSimulationCore", self)
+        self._world = World(sim, self._backend, self.events, self._params.physics)
+        self._fleet = FleetMotion(sim)
+        self._collision = CollisionSystem(sim, self._push_dirty)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
@@ -103,7 +109,6 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
             self._params.profiling_interval, self._params.enable_time_profiling
         )
         self._memory = MemoryProfiler(self._params.enable_memory_profiling)
-        self._monitor: SimulationMonitor | None = None
         self._phases: tuple[tuple[str, Callable[[], None]], ...] = (
             ("events_pre_step", self._phase_pre_step),
             ("callbacks", self._phase_callbacks),
@@ -165,11 +170,6 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
     def sim_time(self) -> float:
         """Simulation time in seconds: ``step_count * timestep`` (never an accumulated float)."""
         return self._step_count * self._params.timestep
-
-    @property
-    def collision_count(self) -> int:
-        """Collisions that started since the last ``initialize_simulation``."""
-        return self._collision_count
 
     @property
     def sim_objects(self) -> list[SimObject]:
@@ -290,19 +290,7 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
             TypeError: if the argument is not a SimPlugin or SimPlugin subclass.
             ValueError: if ``config`` is given with an instance.
         """
-        if isinstance(plugin_or_cls, type) and issubclass(plugin_or_cls, SimPlugin):
-            plugin = plugin_or_cls(self, config)
-        elif isinstance(plugin_or_cls, SimPlugin):
-            if config is not None:
-                raise ValueError(
-                    "register_plugin: config applies to a plugin class, not an instance"
-                )
-            plugin = plugin_or_cls
-        else:
-            raise TypeError(
-                "register_plugin: expected a SimPlugin or SimPlugin subclass, "
-                f"got {plugin_or_cls!r}"
-            )
+        plugin = as_plugin(plugin_or_cls, cast("MultiRobotSimulationCore", self), config)
         freq = frequency if frequency is not None else plugin.frequency
         self._plugin_schedule.add(
             plugin.on_step, freq, owner=f"register_plugin({type(plugin).__name__})"
@@ -412,86 +400,13 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
                 SimEvents.POST_STEP, sim=self, step=self._step_count, sim_time=self.sim_time
             )
 
-    # ----- collisions -----------------------------------------------------------------------
+    # ----- PyBullet's view, profiling -------------------------------------------------------
 
     def _push_dirty(self, rows: np.ndarray) -> None:
         store = self._world.store
         dirty = rows[store.dirty[rows]]
         if len(dirty):
             self._backend.push_rows(store, dirty)
-
-    def note_collisions(self, started: int) -> None:
-        """Count collisions that started (called by the collision system)."""
-        self._collision_count += started
-
-    def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
-        """``{object_id: (aabb_min, aabb_max)}`` of every object taking part in collisions."""
-        return self._collision.get_aabbs()
-
-    def filter_aabb_pairs(
-        self,
-        ignore_static: bool | None = None,
-        moved_objects: set[int] | None = None,
-        return_profiling: bool = False,
-    ) -> tuple[list[tuple[int, int]], dict[str, float] | None]:
-        """Broad phase only: object-id pairs whose AABBs overlap and involve a moved object.
-
-        Args:
-            ignore_static: Skip pairs with a STATIC object (default: params).
-            moved_objects: Object ids to treat as moved (default: those that moved).
-            return_profiling: Also return ``{get_aabbs, spatial_hashing, aabb_filtering,
-                total}`` in ms.
-        """
-        t0 = time.perf_counter()
-        rows, timings = self._collision.filter_pairs(ignore_static, moved_objects)
-        ids = self._world.store.object_id[rows].tolist() if len(rows) else []
-        pairs = sorted(tuple(sorted(pair)) for pair in ids)
-        timings["total"] = (time.perf_counter() - t0) * 1e3
-        return pairs, timings if return_profiling else None
-
-    def check_collisions(
-        self,
-        collision_color: list[float] | None = None,
-        ignore_static: bool | None = None,
-        return_profiling: bool = False,
-    ) -> tuple[list[tuple[int, int]], dict[str, float] | None]:
-        """Run a collision check now; return the active pairs (object ids, i < j)."""
-        pairs, timings = self._collision.check(ignore_static, collision_color)
-        return pairs, timings if return_profiling else None
-
-    def get_active_collision_pairs(self) -> list[tuple[int, int]]:
-        """Pairs (object_id_i < object_id_j) in contact as of the last check."""
-        return self._collision.active_pairs()
-
-    def set_collision_check_frequency(self, frequency: float | None = None) -> None:
-        """Check every step (None), never (0), or at ``frequency`` Hz of sim time."""
-        self._collision.set_frequency(frequency)
-
-    def set_collision_spatial_hash_cell_size_mode(
-        self, mode: SpatialHashCellSizeMode | str | None = None, cell_size: float | None = None
-    ) -> float:
-        """Switch the hash cell size mode (CONSTANT needs ``cell_size``) and recompute it.
-
-        Returns:
-            The cell size now in force (m, > 0).
-        """
-        if mode is not None:
-            self._collision.cell_mode = coerce_enum(SpatialHashCellSizeMode, mode, "mode")
-        if cell_size is not None:
-            if not (isinstance(cell_size, (int, float)) and cell_size > 0):
-                raise ValueError(f"cell_size: expected a number > 0 (m), got {cell_size!r}")
-            self._collision.cell_size = float(cell_size)
-        elif (
-            self._collision.cell_mode is SpatialHashCellSizeMode.CONSTANT
-            and not self._collision.cell_size
-        ):
-            raise ValueError(
-                "set_collision_spatial_hash_cell_size_mode: CONSTANT mode needs a cell_size"
-            )
-        rows = self._collision.prepare_rows()
-        if self._collision.cell_mode is SpatialHashCellSizeMode.CONSTANT:
-            return float(self._collision.cell_size or 1.0)
-        return self._collision.resolve_cell_size(rows, recompute=True)
 
     def record_profiling(self, name: str, value_ms: float) -> None:
         """Add ``value_ms`` to custom profiling field ``name`` for the current step."""
@@ -517,26 +432,6 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
             obj.reset_callbacks()
         self._backend.set_rendering(True)
         self._initialized = True
-
-    def run_simulation(self, duration: float | None = None) -> None:
-        """Step for ``duration`` sim seconds (``params.duration`` if None; <= 0 runs until Ctrl+C).
-
-        Paced at ``params.target_rtf`` times real time (0: as fast as possible).
-        """
-        if not self._initialized:
-            self.initialize_simulation()
-        run_for = self._params.duration if duration is None else duration
-        self.setup_monitor()
-        try:
-            run_loop(self, float(run_for), idle=self._gui_idle if self.is_gui else None)
-        finally:
-            if self._monitor is not None:
-                self._monitor.monitor.stop()
-                self._monitor = None
-            self._stop_recording_after_run()
-
-    def _gui_idle(self) -> None:
-        gui.handle_keyboard(self)
 
     def pause(self) -> None:
         """Pause: ``step_once`` does nothing until :meth:`resume`."""
@@ -572,52 +467,16 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
 
     def close(self) -> None:
         """Disconnect from PyBullet; the simulation cannot step afterwards."""
-        if self._monitor is not None:
-            self._monitor.monitor.stop()
-            self._monitor = None
         self._memory.stop()
         self._backend.disconnect()
 
-    def __enter__(self) -> MultiRobotSimulationCore:
+    def __enter__(self: _Sim) -> _Sim:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    # ----- monitor, rendering, camera -----------------------------------------------------
-
-    def setup_monitor(self) -> None:
-        """Start the DataMonitor if ``params.monitor`` is on (window only with a display)."""
-        if not self._params.monitor or self._monitor is not None:
-            return
-        prm = self._params
-        monitor = DataMonitor(
-            enable_gui=prm.enable_monitor_gui,
-            width=prm.monitor_width,
-            height=prm.monitor_height,
-            x=prm.monitor_x,
-            y=prm.monitor_y,
-        )
-        monitor.start()
-        self._monitor = SimulationMonitor(monitor)
-
-    def update_monitor(self) -> None:
-        """Send the current figures to the monitor (about once per wall second)."""
-        if self._monitor is not None:
-            self._monitor.update(
-                self.sim_time,
-                self._step_count,
-                self._world.object_count,
-                self._world.agent_count,
-                self._collision_count,
-            )
-
-    def setup_pybullet(self) -> None:
-        """Hide the GUI side panels (no-op headless)."""
-        if self.is_gui:
-            p.configureDebugVisualizer(
-                p.COV_ENABLE_GUI, int(self._params.enable_gui_panel), physicsClientId=self.client
-            )
+    # ----- rendering ----------------------------------------------------------------------
 
     def disable_rendering(self) -> None:
         """Stop GUI rendering (for fast spawning)."""
@@ -632,52 +491,3 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         """Spawn many objects with rendering suspended; rendering is restored afterwards."""
         with self._backend.rendering_disabled():
             yield
-
-    def configure_visualizer(
-        self, enable_structure_transparency: bool | None = None, enable_shadows: bool | None = None
-    ) -> None:
-        """Apply visualizer flags (defaults from params; no-op headless)."""
-        if not self.is_gui:
-            return
-        prm = self._params
-        gui.configure_visualizer(
-            self.client,
-            prm.enable_structure_transparency
-            if enable_structure_transparency is None
-            else enable_structure_transparency,
-            prm.enable_shadows if enable_shadows is None else enable_shadows,
-            prm.enable_collision_shapes,
-        )
-
-    def compute_scene_bounds(self) -> tuple[list[float], list[float]]:
-        """(center, extent) of all object positions; zeros when empty."""
-        store = self._world.store
-        return gui.scene_bounds(store.position[store.live_rows()])
-
-    def setup_camera(
-        self,
-        camera_config: dict[str, Any] | None = None,
-        entity_positions: Sequence[Sequence[float]] | None = None,
-    ) -> tuple[float, float, float, list[float]]:
-        """Frame the camera on the scene or ``entity_positions``.
-
-        Returns:
-            (distance, yaw, pitch, target) of the view.
-
-        The view is computed headless too (recorders use it); it is applied only with a GUI.
-        """
-        if entity_positions is not None:
-            center, extent = gui.scene_bounds(
-                np.asarray(entity_positions, dtype=float).reshape(-1, 3)
-            )
-        else:
-            center, extent = self.compute_scene_bounds()
-        view = gui.camera_view(
-            camera_config if camera_config is not None else self._params.camera_config,
-            center,
-            extent,
-        )
-        if self.is_gui:
-            distance, yaw, pitch, target = view
-            p.resetDebugVisualizerCamera(distance, yaw, pitch, target, physicsClientId=self.client)
-        return view

@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["SimPlugin"]
+__all__ = ["SimPlugin", "as_plugin"]
 
 
 class SimPlugin:
@@ -42,3 +42,25 @@ class SimPlugin:
 
     def on_reset(self) -> None:
         """Called after ``sim.reset()`` has cleared the world."""
+
+
+def as_plugin(
+    plugin_or_cls: SimPlugin | type[SimPlugin],
+    sim: MultiRobotSimulationCore,
+    config: dict[str, Any] | None,
+) -> SimPlugin:
+    """The plugin ``register_plugin`` was given, or one made from a SimPlugin subclass.
+
+    Raises:
+        TypeError: if the argument is not a SimPlugin or SimPlugin subclass.
+        ValueError: if ``config`` is given with an instance.
+    """
+    if isinstance(plugin_or_cls, type) and issubclass(plugin_or_cls, SimPlugin):
+        return plugin_or_cls(sim, config)
+    if isinstance(plugin_or_cls, SimPlugin):
+        if config is not None:
+            raise ValueError("register_plugin: config applies to a plugin class, not an instance")
+        return plugin_or_cls
+    raise TypeError(
+        f"register_plugin: expected a SimPlugin or SimPlugin subclass, got {plugin_or_cls!r}"
+    )

@@ -1,4 +1,7 @@
-"""GUI concerns: visualizer flags, camera framing and keyboard shortcuts (no-ops headless)."""
+"""GUI concerns: visualizer flags, camera framing and keyboard shortcuts (no-ops headless).
+
+``GuiApi`` is the simulation's side of it (``setup_camera``, ``configure_visualizer``, ...).
+"""
 
 from __future__ import annotations
 
@@ -10,9 +13,18 @@ import numpy as np
 import pybullet as p
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.world.state import KinematicState
 
-__all__ = ["CAMERA_KEYS", "camera_view", "configure_visualizer", "handle_keyboard", "scene_bounds"]
+__all__ = [
+    "CAMERA_KEYS",
+    "GuiApi",
+    "camera_view",
+    "configure_visualizer",
+    "handle_keyboard",
+    "scene_bounds",
+]
 
 CAMERA_KEYS = (
     "camera_mode",
@@ -97,3 +109,71 @@ def handle_keyboard(sim: MultiRobotSimulationCore) -> None:
             sim.resume()
         else:
             sim.pause()
+
+
+class GuiApi:
+    """Camera and visualizer methods of the simulation (mixed into MultiRobotSimulationCore).
+
+    The view is computed headless too (recorders frame the scene with it); PyBullet is told
+    only when a GUI is open.
+    """
+
+    # Provided by the simulation kernel.
+    params: SimulationParams
+    client: int
+    is_gui: bool
+    state: KinematicState
+
+    def setup_pybullet(self) -> None:
+        """Hide the GUI side panels (no-op headless)."""
+        if self.is_gui:
+            p.configureDebugVisualizer(
+                p.COV_ENABLE_GUI, int(self.params.enable_gui_panel), physicsClientId=self.client
+            )
+
+    def configure_visualizer(
+        self, enable_structure_transparency: bool | None = None, enable_shadows: bool | None = None
+    ) -> None:
+        """Apply visualizer flags (defaults from params; no-op headless)."""
+        if not self.is_gui:
+            return
+        prm = self.params
+        configure_visualizer(
+            self.client,
+            prm.enable_structure_transparency
+            if enable_structure_transparency is None
+            else enable_structure_transparency,
+            prm.enable_shadows if enable_shadows is None else enable_shadows,
+            prm.enable_collision_shapes,
+        )
+
+    def compute_scene_bounds(self) -> tuple[list[float], list[float]]:
+        """(center, extent) of all object positions; zeros when empty."""
+        store = self.state
+        return scene_bounds(store.position[store.live_rows()])
+
+    def setup_camera(
+        self,
+        camera_config: dict[str, Any] | None = None,
+        entity_positions: Sequence[Sequence[float]] | None = None,
+    ) -> tuple[float, float, float, list[float]]:
+        """Frame the camera on the scene or ``entity_positions``.
+
+        Returns:
+            (distance, yaw, pitch, target) of the view.
+
+        The view is computed headless too (recorders use it); it is applied only with a GUI.
+        """
+        if entity_positions is not None:
+            center, extent = scene_bounds(np.asarray(entity_positions, dtype=float).reshape(-1, 3))
+        else:
+            center, extent = self.compute_scene_bounds()
+        view = camera_view(
+            camera_config if camera_config is not None else self.params.camera_config,
+            center,
+            extent,
+        )
+        if self.is_gui:
+            distance, yaw, pitch, target = view
+            p.resetDebugVisualizerCamera(distance, yaw, pitch, target, physicsClientId=self.client)
+        return view

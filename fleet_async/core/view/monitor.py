@@ -15,11 +15,15 @@ import subprocess
 import sys
 import time
 from collections import deque
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.world.backend import display_available
 
-__all__ = ["DataMonitor", "SimulationMonitor"]
+if TYPE_CHECKING:
+    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.world.world import World
+
+__all__ = ["DataMonitor", "MonitorApi", "SimulationMonitor"]
 
 logger = logging.getLogger(__name__)
 
@@ -159,3 +163,48 @@ class SimulationMonitor:
         self._last_write = now
         self.monitor.write_data(data)
         return True
+
+
+class MonitorApi:
+    """The simulation's monitor (mixed into MultiRobotSimulationCore): started by
+    ``run_simulation`` when ``params.monitor`` is on, fed by the run loop, stopped after it."""
+
+    _monitor: SimulationMonitor | None = None
+
+    # Provided by the simulation kernel.
+    params: SimulationParams
+    sim_time: float
+    step_count: int
+    world: World
+    collision_count: int
+
+    def setup_monitor(self) -> None:
+        """Start the DataMonitor if ``params.monitor`` is on (window only with a display)."""
+        if not self.params.monitor or self._monitor is not None:
+            return
+        prm = self.params
+        monitor = DataMonitor(
+            enable_gui=prm.enable_monitor_gui,
+            width=prm.monitor_width,
+            height=prm.monitor_height,
+            x=prm.monitor_x,
+            y=prm.monitor_y,
+        )
+        monitor.start()
+        self._monitor = SimulationMonitor(monitor)
+
+    def update_monitor(self) -> None:
+        """Send the current figures to the monitor (about once per wall second)."""
+        if self._monitor is not None:
+            self._monitor.update(
+                self.sim_time,
+                self.step_count,
+                self.world.object_count,
+                self.world.agent_count,
+                self.collision_count,
+            )
+
+    def _stop_monitor(self) -> None:
+        if self._monitor is not None:
+            self._monitor.monitor.stop()
+            self._monitor = None

@@ -24,7 +24,7 @@ from fleet_async.core.world.tools import resolve_link_index
 
 if TYPE_CHECKING:
     from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.sim.kernel import MultiRobotSimulationCore
+    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["World"]
 

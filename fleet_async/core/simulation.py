@@ -1,0 +1,56 @@
+"""MultiRobotSimulationCore: the simulation users build, assembled from the layers below.
+
+The kernel (``sim/kernel.py``) owns the clock, the step loop and the objects; the mission seam
+(``missions/``) and collision methods (``collision/api.py``) are part of it. This class adds
+what stands above the kernel: scenarios and worlds (``scenario/``), recording, the monitor and
+the GUI (``view/``), and ``run_simulation``, which wraps the step loop in real-time pacing,
+the monitor and GUI input.
+"""
+
+from __future__ import annotations
+
+from fleet_async.core.scenario.build import ScenarioApi
+from fleet_async.core.scenario.world_loader import WorldLoadingApi
+from fleet_async.core.sim.kernel import SimulationKernel
+from fleet_async.core.view import gui
+from fleet_async.core.view.gui import GuiApi
+from fleet_async.core.view.monitor import MonitorApi
+from fleet_async.core.view.recording import RecordingApi
+from fleet_async.core.view.runner import run_loop
+
+__all__ = ["MultiRobotSimulationCore"]
+
+
+class MultiRobotSimulationCore(
+    ScenarioApi, WorldLoadingApi, RecordingApi, MonitorApi, GuiApi, SimulationKernel
+):
+    """A multi-robot simulation on one PyBullet client.
+
+    Args:
+        params: Simulation settings (default ``SimulationParams()``).
+        collision_color: RGBA used to highlight colliding objects when
+            ``enable_collision_color_change`` is on.
+    """
+
+    def run_simulation(self, duration: float | None = None) -> None:
+        """Step for ``duration`` sim seconds (``params.duration`` if None; <= 0 runs until Ctrl+C).
+
+        Paced at ``params.target_rtf`` times real time (0: as fast as possible).
+        """
+        if not self._initialized:
+            self.initialize_simulation()
+        run_for = self._params.duration if duration is None else duration
+        self.setup_monitor()
+        try:
+            run_loop(self, float(run_for), idle=self._gui_idle if self.is_gui else None)
+        finally:
+            self._stop_monitor()
+            self._stop_recording_after_run()
+
+    def _gui_idle(self) -> None:
+        gui.handle_keyboard(self)
+
+    def close(self) -> None:
+        """Disconnect from PyBullet; the simulation cannot step afterwards."""
+        self._stop_monitor()
+        super().close()
