@@ -13,7 +13,7 @@ import anyio
 from fleet_async.tasks.runtime import Runtime
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.missions import MultiRobotSimulationCore
 
 __all__ = ["run", "run_async"]
 

@@ -26,8 +26,7 @@ from typing import TYPE_CHECKING, Any
 import anyio
 import anyio.lowlevel
 
-from fleet_async.core.base.events import SimEvents
-from fleet_async.core.base.types import ActionStatus
+from fleet_async.core.missions import ActionStatus, SimEvents
 from fleet_async.tasks.errors import (
     ActionCancelledError,
     ActionFailedError,
@@ -38,8 +37,7 @@ from fleet_async.tasks.errors import (
 from fleet_async.tasks.parking import Waiter, parker_for_backend
 
 if TYPE_CHECKING:
-    from fleet_async.core.actions.action import Action
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.missions import Action, MultiRobotSimulationCore
     from fleet_async.tasks.timeouts import SimTimeout
 
 __all__ = ["Mission", "Runtime"]

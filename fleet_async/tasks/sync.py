@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, cast
 from fleet_async.tasks.parking import Waiter
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.missions import MultiRobotSimulationCore
     from fleet_async.tasks.runtime import Runtime
 
 __all__ = ["Event", "EventStream", "Lock", "Resource", "Store"]
