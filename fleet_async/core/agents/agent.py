@@ -24,8 +24,8 @@ from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin, cr
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionMode, MotionMode, MovementDirection, coerce_enum
 from fleet_async.core.bodies.models import resolve_model
-from fleet_async.core.bodies.sim_object import SimObject, create_body
-from fleet_async.core.bodies.spawning import create_bodies, wrap_all
+from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.bodies.spawning import create_bodies, create_body, wrap_all
 from fleet_async.core.geometry.limits import Path, Pose
 from fleet_async.core.missions.agent_missions import AgentMissionApi
 from fleet_async.core.motion.controllers import (

@@ -7,10 +7,7 @@ talks to PyBullet client 0 directly, until ``sim.add_object`` adopts it.
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from collections.abc import Callable, Sequence
-from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -18,43 +15,25 @@ import pybullet as p
 
 from fleet_async.core.base.events import EventBus
 from fleet_async.core.base.logging_utils import NamedLazyLogger
-from fleet_async.core.base.paths import resolve_data_file
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.base.types import CollisionMode, coerce_enum
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.bodies.spawning import create_bodies, wrap_all
-from fleet_async.core.geometry.limits import Pose
-from fleet_async.core.world.shapes import ShapeParams, get_or_create_shapes, record_body_shape
+from fleet_async.core.bodies.spawning import (
+    create_bodies,
+    create_body,
+    load_sdf_objects,
+    wrap_all,
+)
+from fleet_async.core.geometry.approach import find_nearest
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.vectors import as_orientation, as_position
+from fleet_async.core.world.shapes import ShapeParams, get_or_create_shapes
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
-from fleet_async.core.world.tools import find_nearest
 
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["ShapeParams", "SimObject", "SimObjectSpawnParams"]
-
-
-def as_position(value: Any, field: str = "position") -> np.ndarray:
-    """Validate ``[x, y, z]`` into a float array, or raise ValueError naming ``field``."""
-    arr = (
-        np.asarray(value, dtype=float) if not isinstance(value, np.ndarray) else value.astype(float)
-    )
-    if arr.shape != (3,) or not np.isfinite(arr).all():
-        raise ValueError(f"{field}: expected 3 finite numbers [x, y, z], got {value!r}")
-    return arr
-
-
-def as_orientation(value: Any, field: str = "orientation") -> np.ndarray:
-    """Validate a quaternion (x, y, z, w) into a unit float array, or raise ValueError."""
-    arr = (
-        np.asarray(value, dtype=float) if not isinstance(value, np.ndarray) else value.astype(float)
-    )
-    if arr.shape != (4,) or not np.isfinite(arr).all():
-        raise ValueError(f"{field}: expected 4 finite numbers [x, y, z, w], got {value!r}")
-    norm = math.sqrt(float(arr @ arr))
-    if norm < 1e-12:
-        raise ValueError(f"{field}: zero quaternion {value!r} is not a rotation")
-    return arr if abs(norm - 1.0) < 1e-12 else arr / norm
 
 
 class SimObject:
@@ -473,37 +452,16 @@ class SimObject:
             FileNotFoundError: naming the paths tried when the file does not exist.
             ValueError: if PyBullet cannot parse the file.
         """
-        search = [] if sim_core is None else list(sim_core.params.model_paths or [])
-        path = resolve_data_file(sdf_path, search, "sdf_path")
-        client = 0 if sim_core is None else sim_core.client
-        try:
-            bodies = p.loadSDF(path, globalScaling=float(global_scaling), physicsClientId=client)
-        except p.error as exc:
-            raise ValueError(f"sdf_path {path!r}: PyBullet could not load it ({exc})") from exc
-        prefix = name_prefix if name_prefix is not None else FsPath(path).stem
-        objects: list[SimObject] = []
-        try:
-            for i, body in enumerate(bodies):
-                if use_fixed_base:
-                    p.changeDynamics(body, -1, mass=0.0, physicsClientId=client)
-                objects.append(
-                    cls(
-                        body,
-                        sim_core=sim_core,
-                        pickable=pickable,
-                        mass=0.0 if use_fixed_base else None,
-                        collision_mode=collision_mode,
-                        name=f"{prefix}_{i}" if len(bodies) > 1 else prefix,
-                    )
-                )
-        except Exception:
-            for obj in objects:
-                if sim_core is not None:
-                    sim_core.remove_object(obj)
-            for body in bodies[len(objects) :]:
-                p.removeBody(body, physicsClientId=client)
-            raise
-        return objects
+        return load_sdf_objects(
+            cls,
+            sdf_path,
+            sim_core,
+            collision_mode,
+            global_scaling,
+            name_prefix,
+            pickable,
+            use_fixed_base,
+        )
 
     # ----- helpers ------------------------------------------------------------------------
 
@@ -532,33 +490,3 @@ class SimObject:
     def _refresh_log_prefix(self) -> None:
         label = f"{self.object_id}:{self.name}" if self.name else str(self.object_id)
         self._log.set_prefix(f"[{type(self).__name__}:{label}] ")
-
-
-def create_body(params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None) -> int:
-    """Create the PyBullet multibody for ``params`` and return its body id."""
-    client = 0 if sim_core is None else sim_core.client
-    if sim_core is None and not p.isConnected(physicsClientId=0):
-        raise RuntimeError(
-            "cannot create a body: no sim_core was given and no PyBullet client is connected; "
-            "pass sim_core=MultiRobotSimulationCore(...)"
-        )
-    search = [] if sim_core is None else list(sim_core.params.model_paths or [])
-    visual, collision = params.visual_shape, params.collision_shape
-    if visual is not None and params.visual_frame_pose is not None:
-        visual = dataclasses.replace(visual, frame_pose=params.visual_frame_pose)
-    if collision is not None and params.collision_frame_pose is not None:
-        collision = dataclasses.replace(collision, frame_pose=params.collision_frame_pose)
-    visual_id, collision_id = get_or_create_shapes(visual, collision, client, search)
-    pos, orn = params.initial_pose.as_position_orientation()
-    body = p.createMultiBody(
-        baseMass=params.mass,
-        baseCollisionShapeIndex=collision_id,
-        baseVisualShapeIndex=visual_id,
-        basePosition=pos,
-        baseOrientation=orn,
-        physicsClientId=client,
-    )
-    if body < 0:
-        raise ValueError(f"PyBullet could not create a body from {params!r}")
-    record_body_shape(client, int(body), collision_id)
-    return int(body)

@@ -19,8 +19,8 @@ from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.geometry.limits import Pose
 from fleet_async.core.world.attachments import Attachment, AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
+from fleet_async.core.world.links import resolve_link_index
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
-from fleet_async.core.world.tools import resolve_link_index
 
 if TYPE_CHECKING:
     from fleet_async.core.bodies.sim_object import SimObject
