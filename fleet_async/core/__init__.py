@@ -57,7 +57,8 @@ from fleet_async.core.bodies.models import (
 )
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.geometry.limits import Path, Pose
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.managers.sim_object_manager import SimObjectManager, register_entity_class

@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.base.types import ActionStatus, MovementDirection, coerce_enum
-from fleet_async.core.geometry.limits import Path, Pose
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.waypoints import Path
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent

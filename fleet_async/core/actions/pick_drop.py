@@ -32,7 +32,7 @@ from fleet_async.core.actions.action import (
 from fleet_async.core.actions.arm_actions import format_position
 from fleet_async.core.base.types import DropPhase, MovementDirection, PickPhase
 from fleet_async.core.geometry.approach import calculate_offset_pose, find_nearest
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent

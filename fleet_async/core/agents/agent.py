@@ -26,7 +26,8 @@ from fleet_async.core.base.types import CollisionMode, MotionMode, MovementDirec
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawning import create_bodies, create_body, wrap_all
-from fleet_async.core.geometry.limits import Path, Pose
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.missions.agent_missions import AgentMissionApi
 from fleet_async.core.motion.controllers import (
     Controller,

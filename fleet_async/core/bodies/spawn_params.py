@@ -8,7 +8,7 @@ from typing import Any
 
 from fleet_async.core.base.config_utils import dataclass_from_dict
 from fleet_async.core.base.types import CollisionMode, coerce_enum
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.world.shapes import ShapeParams
 

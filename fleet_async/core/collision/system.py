@@ -25,7 +25,7 @@ import pybullet as p
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionDetectionMethod, SpatialHashCellSizeMode
 from fleet_async.core.collision.broadphase import aabb_overlap, auto_cell_size, candidate_pairs
-from fleet_async.core.geometry.limits import rotate_vectors_batch
+from fleet_async.core.geometry.quaternions import rotate_vectors_batch
 from fleet_async.core.world.shapes import body_collision_shape
 from fleet_async.core.world.state import COLLISION_CODES
 

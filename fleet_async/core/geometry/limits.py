@@ -1,11 +1,9 @@
-"""Geometry API: kinematic-limit helpers, plus ``Pose``, ``Path`` and quaternion helpers.
+"""Kinematic-limit helpers: scalar (Euclidean) or per-axis (box) limits on vectors.
 
-This is the public entry point of the reference API's ``geometry`` module. ``Pose`` lives in
-``geometry/pose.py``, ``Path`` in ``geometry/waypoints.py`` and the quaternion helpers in
-``geometry/quaternions.py``; all are re-exported here. Quaternions are ``(x, y, z, w)`` like
-PyBullet; Euler angles follow ``pybullet.getQuaternionFromEuler`` (roll about X, then
-pitch about Y, then yaw about Z, all about fixed axes: ``q = q_yaw * q_pitch * q_roll``).
-Positions are in metres, angles in radians.
+A limit is one number (a bound on the vector's norm) or one number per axis (a bound on each
+component). The reference API's ``geometry`` module (``fleet_async.geometry``) re-exports these
+with ``Pose`` (``pose.py``), ``Path`` (``waypoints.py``) and the quaternion helpers
+(``quaternions.py``). Positions are in metres, angles in radians.
 """
 
 from __future__ import annotations
@@ -16,52 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.geometry.quaternions import (
-    Quat,
-    SlerpPrecomp,
-    compose_poses_batch,
-    euler_from_quat,
-    quat_angle_between,
-    quat_from_euler,
-    quat_from_rotvec,
-    quat_multiply,
-    quat_multiply_batch,
-    quat_slerp,
-    quat_slerp_batch,
-    quat_slerp_precompute,
-    quat_to_rot_matrix,
-    rotate_vector,
-    rotate_vectors_batch,
-    yaw_from_quats,
-)
-from fleet_async.core.geometry.waypoints import Path
-
-__all__ = [
-    "Path",
-    "Pose",
-    "Quat",
-    "ScalarOrAxes",
-    "SlerpPrecomp",
-    "as_axes",
-    "clamp_vec_to_limit",
-    "compose_poses_batch",
-    "euler_from_quat",
-    "is_scalar",
-    "projected_axis_limit",
-    "quat_angle_between",
-    "quat_from_euler",
-    "quat_from_rotvec",
-    "quat_multiply",
-    "quat_multiply_batch",
-    "quat_slerp",
-    "quat_slerp_batch",
-    "quat_slerp_precompute",
-    "quat_to_rot_matrix",
-    "rotate_vector",
-    "rotate_vectors_batch",
-    "yaw_from_quats",
-]
+__all__ = ["ScalarOrAxes", "as_axes", "clamp_vec_to_limit", "is_scalar", "projected_axis_limit"]
 
 ScalarOrAxes = float | Sequence[float] | np.ndarray
 """Scalar limit (a Euclidean-norm bound) or per-axis sequence (a box bound)."""

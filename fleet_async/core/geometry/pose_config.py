@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 
 __all__ = ["pose_from_config"]
 

@@ -14,7 +14,7 @@ from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.base.config_utils import resolve_class
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.managers.sim_object_manager import SimObjectManager
 from fleet_async.core.motion.controllers import (

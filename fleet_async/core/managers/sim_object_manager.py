@@ -28,7 +28,7 @@ from fleet_async.core.agents.agent import Agent
 from fleet_async.core.base.config_utils import load_yaml_config, register_class
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.managers.grid_spawn import (
     GridSpawnParams,
     assign_by_counts,

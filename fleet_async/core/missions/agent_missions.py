@@ -16,7 +16,8 @@ from fleet_async.core.actions.action import Action, MoveAction, WaitAction
 from fleet_async.core.actions.arm_actions import JointAction, PoseAction
 from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.base.types import ActionStatus
-from fleet_async.core.geometry.limits import Path, Pose
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.waypoints import Path
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent

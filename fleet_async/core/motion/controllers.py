@@ -24,7 +24,7 @@ import numpy as np
 
 from fleet_async.core.base.config_utils import resolve_class
 from fleet_async.core.base.types import MotionMode, MovementDirection, coerce_enum
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.motion.kinematics import (
     KIND_DIFFERENTIAL,

@@ -28,12 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fleet_async.core.base.types import MovementDirection
-from fleet_async.core.geometry.limits import (
-    Pose,
-    quat_from_euler,
-    quat_slerp_batch,
-    yaw_from_quats,
-)
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.quaternions import quat_from_euler, quat_slerp_batch, yaw_from_quats
 from fleet_async.core.world.state import KinematicState
 
 __all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine", "MotionLimits"]

@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fleet_async.core.geometry.limits import Pose, compose_poses_batch
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.quaternions import compose_poses_batch
 from fleet_async.core.world.state import KinematicState
 
 if TYPE_CHECKING:

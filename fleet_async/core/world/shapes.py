@@ -16,7 +16,7 @@ import pybullet as p
 
 from fleet_async.core.base.config_utils import dataclass_from_dict
 from fleet_async.core.base.paths import resolve_data_file
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
 
 __all__ = [

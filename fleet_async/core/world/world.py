@@ -16,7 +16,7 @@ import pybullet as p
 
 from fleet_async.core.base.events import EventBus, SimEvents
 from fleet_async.core.base.types import CollisionMode
-from fleet_async.core.geometry.limits import Pose
+from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.world.attachments import Attachment, AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.links import resolve_link_index
