@@ -26,12 +26,8 @@ from fleet_async.core.base.config_utils import resolve_class
 from fleet_async.core.base.types import MotionMode, MovementDirection, coerce_enum
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
-from fleet_async.core.motion.kinematics import (
-    KIND_DIFFERENTIAL,
-    KIND_OMNI,
-    KinematicEngine,
-    MotionLimits,
-)
+from fleet_async.core.motion.kinematics import KIND_DIFFERENTIAL, KIND_OMNI, KinematicEngine
+from fleet_async.core.motion.segments import MotionLimits
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent

@@ -30,71 +30,21 @@ import numpy as np
 from fleet_async.core.base.types import MovementDirection
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.quaternions import quat_from_euler, quat_slerp_batch, yaw_from_quats
+from fleet_async.core.motion.segments import (
+    EPS_ANGLE,
+    EPS_LEN,
+    MotionLimits,
+    axis_cap,
+    braking_rate,
+    heading_toward,
+)
 from fleet_async.core.world.state import KinematicState
 
-__all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine", "MotionLimits"]
+__all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine"]
 
 KIND_OMNI = 0
 KIND_DIFFERENTIAL = 1
 _IDLE, _VELOCITY, _POSE = 0, 1, 2
-_EPS_LEN = 1e-9  # m: shorter segments are skipped
-_EPS_ANGLE = 1e-9  # rad: smaller rotations are skipped
-
-
-@dataclass(frozen=True)
-class MotionLimits:
-    """Kinematic limits of one agent; each is a scalar (Euclidean) or per-axis (x, y, z)."""
-
-    max_linear_vel: float | tuple[float, float, float]
-    max_linear_accel: float | tuple[float, float, float]
-    max_angular_vel: float | tuple[float, float, float]
-    max_angular_accel: float | tuple[float, float, float]
-
-
-def _heading(
-    direction: MovementDirection, pos: np.ndarray, orn: np.ndarray, target: np.ndarray
-) -> np.ndarray | None:
-    """Orientation a differential robot turns to before driving to ``target`` (None: no turn)."""
-    dx, dy = float(target[0] - pos[0]), float(target[1] - pos[1])
-    if math.hypot(dx, dy) < _EPS_LEN:
-        return None
-    yaw = math.atan2(dy, dx)
-    if direction is MovementDirection.AUTO:
-        current = float(yaw_from_quats(orn[None, :])[0])
-        off = abs((yaw - current + math.pi) % (2 * math.pi) - math.pi)
-        direction = MovementDirection.BACKWARD if off > math.pi / 2 else MovementDirection.FORWARD
-    if direction is MovementDirection.BACKWARD:
-        yaw += math.pi
-    return quat_from_euler(0.0, 0.0, yaw)
-
-
-def _braking_rate(remaining: np.ndarray, accel: np.ndarray, dt: float) -> np.ndarray:
-    """Fastest rate from which the discrete braking sequence still stops within ``remaining``.
-
-    Braking as hard as allowed from rate ``v = (j + f) * c`` (``c = accel * dt``, j integer,
-    f in (0, 1]) moves ``v, v - c, ..., f * c`` per step and covers
-    ``dt * c * (j + 1) * (f + j / 2)``. Inverting that for the largest ``v`` that fits gives a
-    profile that never brakes harder than ``accel``, ends with a last step of at most ``c``
-    (so the final stop is within the limit too), and lands exactly on the target.
-    """
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        c = accel * dt
-        scaled = remaining / (dt * c)
-        j = np.maximum(np.ceil((np.sqrt(1.0 + 8.0 * scaled) - 1.0) / 2.0) - 1.0, 0.0)
-        f = np.clip(scaled / (j + 1.0) - j / 2.0, 0.0, 1.0)
-        rate = (j + f) * c
-    return np.where(np.isfinite(c), rate, np.inf)
-
-
-def _axis_cap(limit: np.ndarray, scalar: bool, direction: np.ndarray) -> float:
-    """Largest magnitude along unit ``direction`` allowed by a scalar or per-axis limit."""
-    if scalar:
-        return float(limit[0])
-    ratios = np.abs(direction) / limit
-    worst = float(ratios.max())
-    return math.inf if worst == 0.0 else 1.0 / worst
-
-
 _NONE, _TURNED, _DRIVING = 0, 1, 2  # progress toward the plan's next waypoint
 
 
@@ -338,7 +288,7 @@ class KinematicEngine:
                 target = plan.waypoints[0]
                 if differential and plan.stage == _NONE:
                     plan.stage = _TURNED
-                    heading = _heading(plan.direction, pos, orn, target.position)
+                    heading = heading_toward(plan.direction, pos, orn, target.position)
                     if heading is not None and self._start(slot, pos, heading):
                         return
                     continue
@@ -378,16 +328,16 @@ class KinematicEngine:
         dot = min(dot, 1.0)
         sl_theta = math.acos(dot)
         theta = 2.0 * sl_theta  # rotation angle between the two orientations
-        if length < _EPS_LEN and theta < _EPS_ANGLE:
+        if length < EPS_LEN and theta < EPS_ANGLE:
             return False
         rate_v, rate_a = math.inf, math.inf
-        if length >= _EPS_LEN:
+        if length >= EPS_LEN:
             unit = np.array((dx / length, dy / length, dz / length))
             scalar = bool(self.lin_scalar[slot])
-            rate_v = _axis_cap(self.vmax[slot], scalar, unit) / length
-            rate_a = _axis_cap(self.amax[slot], scalar, unit) / length
+            rate_v = axis_cap(self.vmax[slot], scalar, unit) / length
+            rate_a = axis_cap(self.amax[slot], scalar, unit) / length
         axis = (0.0, 0.0, 0.0)
-        if theta >= _EPS_ANGLE:
+        if theta >= EPS_ANGLE:
             # relative rotation q1 * conj(q0); its vector part is the axis times sin(theta / 2)
             rx = bw * -ax + bx * aw + by * -az - bz * -ay
             ry = bw * -ay - bx * -az + by * aw + bz * -ax
@@ -398,8 +348,8 @@ class KinematicEngine:
             )
             unit_axis = np.array(axis)
             scalar = bool(self.ang_scalar[slot])
-            rate_v = min(rate_v, _axis_cap(self.wmax[slot], scalar, unit_axis) / theta)
-            rate_a = min(rate_a, _axis_cap(self.alpha[slot], scalar, unit_axis) / theta)
+            rate_v = min(rate_v, axis_cap(self.wmax[slot], scalar, unit_axis) / theta)
+            rate_a = min(rate_a, axis_cap(self.alpha[slot], scalar, unit_axis) / theta)
         self.p0[slot] = (px, py, pz)
         self.p1[slot] = (tx, ty, tz)
         self.q0[slot] = (ax, ay, az, aw)
@@ -456,7 +406,7 @@ class KinematicEngine:
         # segment's last step (its velocity must fall to zero and the new one rise from it).
         carry = self.carry[s]
         rate = np.minimum(self.du[s] + amax * dt * (1.0 - carry), self.u_vmax[s])
-        rate = np.minimum(rate, _braking_rate(remaining, amax, dt))
+        rate = np.minimum(rate, braking_rate(remaining, amax, dt))
         step = rate * dt
         arrived = step >= remaining - 1e-12
         any_arrived = bool(arrived.any())
