@@ -450,7 +450,7 @@ def test_set_controller_none_disables_movement(sim, caplog):
     agent.set_controller(None)
     assert agent.controller is None and agent.controllers == [] and agent.motion_slot == -1
     assert limits_of(agent.controller_params) == DEFAULT_LIMITS
-    with caplog.at_level("WARNING", logger="fleet_async.core.agents.agent"):
+    with caplog.at_level("WARNING", logger="fleet_async.core.agents.agent_motion"):
         agent.set_goal_pose(Pose.from_xyz(1.0, 0.0, 0.1))
     assert "no base controller" in caplog.text
     for _ in range(10):
