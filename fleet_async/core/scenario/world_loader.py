@@ -7,23 +7,22 @@ anything failed and ``on_error`` is ``"raise"`` (the default), the bodies alread
 removed and :class:`WorldLoadError` lists every failure; nothing half-loaded remains and no
 spawn event was emitted. With ``on_error: "warn"`` each failure is logged and the rest loads.
 
-File-format work (``model://`` lookup, SDF rewriting for PyBullet) lives in ``gazebo_world.py``.
+The ``world_config`` mapping is checked in ``world_config.py``; file-format work (``model://``
+lookup, SDF rewriting for PyBullet) lives in ``gazebo_world.py`` and ``sdf_rewriter.py``.
 """
 
 from __future__ import annotations
 
-import difflib
 import logging
 import os
 import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, Any, cast
 
 import pybullet as p
-import pybullet_data
 
 from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.bodies.sim_object import SimObject
@@ -31,7 +30,6 @@ from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.scenario.gazebo_world import (
     AssetProblem,
     ModelSearch,
-    SdfRewriter,
     WorldEntry,
     inline_model_sdf,
     model_sdf_file,
@@ -40,6 +38,13 @@ from fleet_async.core.scenario.gazebo_world import (
     remove_models,
     sdf_models,
     unsupported_world_elements,
+)
+from fleet_async.core.scenario.sdf_rewriter import SdfRewriter
+from fleet_async.core.scenario.world_config import (
+    MESH_SUFFIXES,
+    WorldOptions,
+    model_search_dirs,
+    read_world_config,
 )
 from fleet_async.core.world.backend import native_output_logged
 from fleet_async.core.world.shapes import forget_body_shape, record_body_shape
@@ -50,11 +55,6 @@ if TYPE_CHECKING:
 __all__ = ["WorldLoadError", "WorldLoadFailure", "WorldLoadingApi"]
 
 logger = logging.getLogger(__name__)
-
-SOURCE_KEYS = ("world_file", "sdf", "mesh_dir")
-"""World sources, in priority order: the first one present is loaded."""
-OPTION_KEYS = ("skip_models", "model_paths", "on_error")
-MESH_SUFFIXES = (".obj", ".stl")
 
 
 @dataclass(frozen=True)
@@ -92,145 +92,6 @@ class WorldLoadError(RuntimeError):
             f"load_world({source}): {len(self.failures)} model(s) could not be loaded, so "
             f"nothing was loaded (set world_config on_error: 'warn' to load the rest):\n{lines}"
         )
-
-
-# ----- world_config ---------------------------------------------------------------------------
-
-
-@dataclass
-class WorldOptions:
-    """A checked ``world_config``.
-
-    Attributes:
-        key: The source key used ("world_file", "sdf" or "mesh_dir").
-        source: Absolute path of that source.
-        skip: Model names not to load.
-        model_paths: Absolute directories searched first for ``model://`` URIs.
-        on_error: "raise" or "warn".
-    """
-
-    key: str
-    source: FsPath
-    skip: set[str] = field(default_factory=set)
-    model_paths: list[FsPath] = field(default_factory=list)
-    on_error: str = "raise"
-
-
-def _absolute(value: Any, key: str, base: FsPath) -> FsPath:
-    if not isinstance(value, (str, os.PathLike)) or not os.fspath(value):
-        raise ValueError(f"load_world: world_config[{key!r}] must be a path, got {value!r}")
-    path = FsPath(os.fspath(value)).expanduser()
-    return path if path.is_absolute() else base / path
-
-
-def _names(value: Any, key: str) -> set[str]:
-    if value is None:
-        return set()
-    if not isinstance(value, (list, tuple, set)) or not all(isinstance(v, str) for v in value):
-        raise ValueError(f"load_world: {key} must be a list of model names, got {value!r}")
-    return set(value)
-
-
-def _source_key(world_config: Mapping[str, Any]) -> str:
-    """The source key to load; unknown keys and a missing source are errors."""
-    valid = (*SOURCE_KEYS, *OPTION_KEYS)
-    for key in world_config:
-        if key not in valid:
-            nearest = difflib.get_close_matches(str(key), valid, n=1, cutoff=0.0)[0]
-            raise ValueError(
-                f"load_world: unknown world_config key {key!r} (nearest valid key: {nearest!r}); "
-                f"valid keys: {', '.join(valid)}"
-            )
-    sources = [key for key in SOURCE_KEYS if key in world_config]
-    if not sources:
-        raise ValueError(
-            "load_world: world_config needs one of 'world_file' (Gazebo .world), 'sdf' (SDF "
-            "file) or 'mesh_dir' (directory of .obj/.stl meshes); accepted keys: "
-            f"{', '.join(valid)}; got {sorted(map(str, world_config))}"
-        )
-    if len(sources) > 1:
-        logger.warning(
-            "load_world: loading %r; ignoring lower-priority %s", sources[0], sources[1:]
-        )
-    return sources[0]
-
-
-def _model_paths(value: Any, base: FsPath) -> list[FsPath]:
-    if value is None:
-        return []
-    if not isinstance(value, (list, tuple)):
-        raise ValueError(f"load_world: model_paths must be a list of directories, got {value!r}")
-    paths = [_absolute(d, "model_paths", base) for d in value]
-    for directory in paths:
-        if not directory.is_dir():
-            raise FileNotFoundError(
-                f"load_world: model_paths directory not found: {directory.absolute()}"
-            )
-    return [d.resolve() for d in paths]
-
-
-def _source_path(key: str, value: Any, base: FsPath, model_paths: list[FsPath]) -> FsPath:
-    path = _absolute(value, key, base)
-    tried = [path]
-    if key == "sdf" and not FsPath(os.fspath(value)).expanduser().is_absolute():
-        rel = FsPath(os.fspath(value))
-        tried += [d / rel for d in (*model_paths, FsPath(pybullet_data.getDataPath()))]
-    for candidate in tried:
-        if candidate.is_dir() if key == "mesh_dir" else candidate.is_file():
-            return candidate.resolve()
-    kind = "directory" if key == "mesh_dir" else "file"
-    raise FileNotFoundError(
-        f"load_world: world_config[{key!r}] {kind} not found: "
-        + ", ".join(str(c.absolute()) for c in tried)
-    )
-
-
-def read_world_config(
-    world_config: Mapping[str, Any],
-    skip_models: Sequence[str] | None = None,
-    base_dir: str | os.PathLike[str] | None = None,
-) -> WorldOptions:
-    """Check ``world_config`` and resolve its paths (see ``load_world``).
-
-    Raises:
-        TypeError: if ``world_config`` is not a mapping.
-        ValueError: for an unknown key (naming the nearest valid one), no source key, or a
-            bad value.
-        FileNotFoundError: for a source or model path that does not exist (absolute path).
-    """
-    if not isinstance(world_config, Mapping):
-        raise TypeError(f"load_world: world_config must be a mapping, got {world_config!r}")
-    key = _source_key(world_config)
-    on_error = world_config.get("on_error", "raise")
-    if on_error not in ("raise", "warn"):
-        raise ValueError(f"load_world: on_error must be 'raise' or 'warn', got {on_error!r}")
-    base = FsPath(os.fspath(base_dir)).expanduser() if base_dir is not None else FsPath.cwd()
-    model_paths = _model_paths(world_config.get("model_paths"), base)
-    return WorldOptions(
-        key=key,
-        source=_source_path(key, world_config[key], base, model_paths),
-        skip=_names(world_config.get("skip_models"), "skip_models")
-        | _names(skip_models, "skip_models"),
-        model_paths=model_paths,
-        on_error=on_error,
-    )
-
-
-def model_search_dirs(model_paths: Sequence[FsPath], source: FsPath, key: str) -> list[FsPath]:
-    """Where ``model://`` URIs are looked up, in order.
-
-    ``model_paths``, then ``GAZEBO_MODEL_PATH`` (read now), then the source's directory and its
-    ``models`` subdirectory; for an ``sdf`` source also the directory above, so a model's own
-    SDF finds ``model://<itself>/meshes/...``.
-    """
-    env = [
-        FsPath(d).absolute()
-        for d in os.environ.get("GAZEBO_MODEL_PATH", "").split(os.pathsep)
-        if d.strip()
-    ]
-    here = source if key == "mesh_dir" else source.parent
-    above = [here.parent] if key == "sdf" else []
-    return [*model_paths, *env, here, here / "models", *above]
 
 
 # ----- loading bodies into PyBullet -----------------------------------------------------------
