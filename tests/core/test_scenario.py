@@ -1,4 +1,4 @@
-"""Scenarios: a whole simulation from one mapping or YAML file (fleet_async/core/scenario.py)."""
+"""Scenarios: a whole simulation from one mapping or YAML file (core/scenario/build.py)."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 Both command joint targets on their first step and then wait, without polling, for the joints
 to arrive: the joint pass wakes the action at the end of every step in which the agent's
-joints moved (see ``core/joints.py``). Like a move, an arm action completes at the end of the
+joints moved (see ``motion/joints.py``). Like a move, an arm action completes at the end of the
 step in which its joints came within tolerance.
 """
 

@@ -4,7 +4,7 @@
 API's joint surface: joint state by index / name, joint targets (one, all, a list or a dict),
 convergence checks with per-joint tolerances, and end-effector control through IK. Setting a
 target is fire-and-forget: the joints move in the following steps' motion phase (see
-``core/joints.py``); ``JointAction`` / ``PoseAction`` wait for them.
+``motion/joints.py``); ``JointAction`` / ``PoseAction`` wait for them.
 
 Joint tolerance resolution (``tolerance`` arguments and ``joint_tolerance``): a float applies to
 every joint, a list is indexed by joint index, a dict maps joint names to values (joints it

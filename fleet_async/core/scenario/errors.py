@@ -1,4 +1,4 @@
-"""Error reporting shared by the scenario loader (``scenario.py``, ``scenario_entities.py``).
+"""Error reporting shared by the scenario loader (``build.py``, ``entities.py``).
 
 Every message starts with the file (``where``) and the section or key (``label``), such as
 ``scenario.yaml: entities[2].grid: ...``.
