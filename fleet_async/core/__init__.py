@@ -1,7 +1,11 @@
 """The synchronous simulator: state store, step loop, events, objects and the PyBullet adapter.
 
-Nothing in ``fleet_async.core`` imports ``fleet_async.tasks``; the async mission layer sits on
-top of this package and never inside it.
+Its sub-packages are layers that import only downward at run time, from ``base`` up through
+``geometry``, ``world``, ``collision``, ``bodies``, ``motion``, ``actions``, ``missions``,
+``agents``, ``sim`` and ``managers`` to ``scenario`` and ``view``; ``simulation.py`` assembles
+``MultiRobotSimulationCore`` on top (docs/architecture.md). Nothing in ``fleet_async.core``
+imports ``fleet_async.tasks``; the async mission layer sits on top of this package, reaches it
+through ``fleet_async.core.missions``, and never inside it.
 """
 
 from fleet_async.core.actions.action import (
