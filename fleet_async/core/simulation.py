@@ -12,8 +12,7 @@ from __future__ import annotations
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
-from fleet_async.core.view import gui
-from fleet_async.core.view.gui import GuiApi
+from fleet_async.core.view.gui import GuiApi, handle_keyboard
 from fleet_async.core.view.monitor import MonitorApi
 from fleet_async.core.view.recording import RecordingApi
 from fleet_async.core.view.runner import run_loop
@@ -48,7 +47,7 @@ class MultiRobotSimulationCore(
             self._stop_recording_after_run()
 
     def _gui_idle(self) -> None:
-        gui.handle_keyboard(self)
+        handle_keyboard(self)
 
     def close(self) -> None:
         """Disconnect from PyBullet; the simulation cannot step afterwards."""
