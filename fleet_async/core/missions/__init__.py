@@ -9,8 +9,8 @@
   to the installed runtime;
 - ``AgentMissionApi`` / ``ActionHandle`` (``agent_missions.py``): ``await agent.move(...)``
   and the other agent commands, each queueing an Action;
-- what the runtime reads back: ``SimEvents``, ``ActionStatus``, ``Action``, and (for
-  annotations only) ``MultiRobotSimulationCore``.
+- what the runtime reads back: ``SimEvents``, ``ActionStatus``, ``Action``, ``MoveAction``,
+  ``WaitAction``, and (for annotations only) ``MultiRobotSimulationCore``.
 
 May import ``actions`` and below at run time.
 """
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from fleet_async.core.actions.action import Action
+from fleet_async.core.actions.action import Action, MoveAction, WaitAction
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.missions.agent_missions import ActionHandle, AgentMissionApi
@@ -35,7 +35,9 @@ __all__ = [
     "ActionStatus",
     "AgentMissionApi",
     "MissionRuntime",
+    "MoveAction",
     "SimEventBus",
     "SimEvents",
     "SimMissionApi",
+    "WaitAction",
 ]
