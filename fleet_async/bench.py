@@ -27,13 +27,13 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from fleet_async.core.agent import Agent
-from fleet_async.core.agent_params import AgentSpawnParams
-from fleet_async.core.geometry import Pose
-from fleet_async.core.params import SimulationParams
-from fleet_async.core.shapes import ShapeParams
+from fleet_async.core.agents.agent import Agent
+from fleet_async.core.agents.agent_params import AgentSpawnParams
+from fleet_async.core.base.types import CollisionDetectionMethod
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
-from fleet_async.core.types import CollisionDetectionMethod
+from fleet_async.core.world.shapes import ShapeParams
 
 __all__ = [
     "DEFAULT_SIZES",

@@ -24,7 +24,7 @@ from typing import Any
 
 import pytest
 
-from fleet_async.core.params import SimulationParams
+from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.tasks.run import run
 

@@ -29,3 +29,10 @@ def test_core_never_imports_tasks():
 def test_public_names_are_exported_and_resolve():
     for name in fleet_async.__all__:
         assert hasattr(fleet_async, name), name
+
+
+def test_core_names_are_exported_by_the_package():
+    import fleet_async.core as core
+
+    for name in core.__all__:
+        assert getattr(core, name) is getattr(fleet_async, name), name

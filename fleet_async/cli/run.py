@@ -19,12 +19,12 @@ from typing import Any
 
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
-from fleet_async.core import gui, runner
-from fleet_async.core.config_utils import load_yaml_config
-from fleet_async.core.events import SimEvents
-from fleet_async.core.runner import steps_for
-from fleet_async.core.scenario import SCENARIO_SECTIONS
+from fleet_async.core.base.config_utils import load_yaml_config
+from fleet_async.core.base.events import SimEvents
+from fleet_async.core.scenario.build import SCENARIO_SECTIONS
 from fleet_async.core.simulation import MultiRobotSimulationCore
+from fleet_async.core.view import gui, runner
+from fleet_async.core.view.runner import steps_for
 
 __all__ = [
     "ActionTally",

@@ -1,10 +1,14 @@
 """The synchronous simulator: state store, step loop, events, objects and the PyBullet adapter.
 
-Nothing in ``fleet_async.core`` imports ``fleet_async.tasks``; the async mission layer sits on
-top of this package and never inside it.
+Its sub-packages are layers that import only downward at run time, from ``base`` up through
+``geometry``, ``world``, ``collision``, ``bodies``, ``motion``, ``actions``, ``missions``,
+``agents``, ``sim`` and ``managers`` to ``scenario`` and ``view``; ``simulation.py`` assembles
+``MultiRobotSimulationCore`` on top (docs/architecture.md). Nothing in ``fleet_async.core``
+imports ``fleet_async.tasks``; the async mission layer sits on top of this package, reaches it
+through ``fleet_async.core.missions``, and never inside it.
 """
 
-from fleet_async.core.action import (
+from fleet_async.core.actions.action import (
     DEFAULT_EE_TOLERANCE,
     DEFAULT_JOINT_TOLERANCE,
     DEFAULT_MAX_FORCE,
@@ -13,12 +17,12 @@ from fleet_async.core.action import (
     MoveAction,
     WaitAction,
 )
-from fleet_async.core.agent import Agent
-from fleet_async.core.agent_manager import AgentManager
-from fleet_async.core.agent_params import AgentSpawnParams, IKParams
-from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin
-from fleet_async.core.arm_actions import JointAction, PoseAction
-from fleet_async.core.config_utils import (
+from fleet_async.core.actions.arm_actions import JointAction, PoseAction
+from fleet_async.core.actions.pick_drop import DropAction, PickAction
+from fleet_async.core.agents.agent import Agent
+from fleet_async.core.agents.agent_params import AgentSpawnParams
+from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin
+from fleet_async.core.base.config_utils import (
     dataclass_from_dict,
     forward_spawn_params,
     load_config,
@@ -26,46 +30,15 @@ from fleet_async.core.config_utils import (
     merge_configs,
     resolve_class,
 )
-from fleet_async.core.controllers import (
-    Controller,
-    ControllerParams,
-    DifferentialController,
-    KinematicController,
-    OmniController,
-    PatrolController,
-    RandomWalkController,
-    create_controller,
-    register_controller,
-)
-from fleet_async.core.events import EventBus, SimEvents
-from fleet_async.core.geometry import Path, Pose
-from fleet_async.core.grid_spawn import GridSpawnParams
-from fleet_async.core.logging_utils import (
+from fleet_async.core.base.events import EventBus, SimEvents
+from fleet_async.core.base.logging_utils import (
     LazyLogger,
     NamedLazyLogger,
     get_lazy_logger,
     get_named_lazy_logger,
     wrap_existing_logger,
 )
-from fleet_async.core.managers import SimObjectManager, register_entity_class
-from fleet_async.core.models import (
-    add_model_search_path,
-    list_model_search_paths,
-    list_models,
-    register_model,
-    remove_model_search_path,
-    resolve_model,
-)
-from fleet_async.core.monitor import DataMonitor
-from fleet_async.core.params import SimulationParams
-from fleet_async.core.pick_drop import DropAction, PickAction
-from fleet_async.core.plugins import SimPlugin
-from fleet_async.core.recording import SimulationRecorder
-from fleet_async.core.shapes import ShapeParams
-from fleet_async.core.sim_object import SimObject
-from fleet_async.core.simulation import MultiRobotSimulationCore
-from fleet_async.core.spawn_params import SimObjectSpawnParams
-from fleet_async.core.types import (
+from fleet_async.core.base.types import (
     ActionStatus,
     CollisionDetectionMethod,
     CollisionMode,
@@ -78,7 +51,40 @@ from fleet_async.core.types import (
     PosePhase,
     SpatialHashCellSizeMode,
 )
-from fleet_async.core.world_loader import WorldLoadError, WorldLoadFailure
+from fleet_async.core.bodies.models import (
+    add_model_search_path,
+    list_model_search_paths,
+    list_models,
+    register_model,
+    remove_model_search_path,
+    resolve_model,
+)
+from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.waypoints import Path
+from fleet_async.core.managers.agent_manager import AgentManager
+from fleet_async.core.managers.grid_spawn import GridSpawnParams
+from fleet_async.core.managers.sim_object_manager import SimObjectManager, register_entity_class
+from fleet_async.core.motion.controllers import (
+    Controller,
+    ControllerParams,
+    DifferentialController,
+    KinematicController,
+    OmniController,
+    PatrolController,
+    RandomWalkController,
+    create_controller,
+    register_controller,
+)
+from fleet_async.core.motion.ik import IKParams
+from fleet_async.core.scenario.world_loader import WorldLoadError, WorldLoadFailure
+from fleet_async.core.sim.params import SimulationParams
+from fleet_async.core.sim.plugins import SimPlugin
+from fleet_async.core.simulation import MultiRobotSimulationCore
+from fleet_async.core.view.monitor import DataMonitor
+from fleet_async.core.view.recording import SimulationRecorder
+from fleet_async.core.world.shapes import ShapeParams
 
 __all__ = [
     "DEFAULT_EE_TOLERANCE",

@@ -30,7 +30,7 @@ if sys.version_info < (3, 11):  # pragma: no cover  # anyio brings the backport
     from exceptiongroup import BaseExceptionGroup
 
 if TYPE_CHECKING:
-    from fleet_async.core import MultiRobotSimulationCore
+    from fleet_async.core.missions import MultiRobotSimulationCore
     from fleet_async.tasks.missions import Mission
 
 __all__ = ["run", "run_async"]

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fleet_async.core import SimEvents
+from fleet_async.core.missions import SimEvents
 from fleet_async.tasks.conditions import AllOf, AnyOf
 from fleet_async.tasks.groups import Nursery, TaskGroup, gather, race
 from fleet_async.tasks.kernel import STEP, Kernel, SimEvent, Timeout
@@ -24,7 +24,7 @@ from fleet_async.tasks.sync import Event, EventStream
 from fleet_async.tasks.waits import ActionWait, BusWait, PredicateWait
 
 if TYPE_CHECKING:
-    from fleet_async.core import MultiRobotSimulationCore
+    from fleet_async.core.missions import MultiRobotSimulationCore
 
 __all__ = ["Runtime"]
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from fleet_async.core import ActionStatus, MoveAction, WaitAction
+from fleet_async.core.missions import ActionStatus, MoveAction, WaitAction
 from fleet_async.tasks.errors import ActionCancelledError, ActionFailedError
 from fleet_async.tasks.kernel import SimEvent
 

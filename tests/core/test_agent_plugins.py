@@ -348,7 +348,7 @@ def test_plugin_from_a_class_path(sim):
         plugins=[
             {"class": f"{StepCounter.__module__}.StepCounter", "config": {"label": "x"}},
             {
-                "class": "fleet_async.core.agent_plugins.BatteryPlugin",
+                "class": "fleet_async.core.agents.agent_plugins.BatteryPlugin",
                 "config": {"initial_soc": 0.7},
             },
         ],
@@ -365,14 +365,14 @@ def test_plugin_from_a_class_path(sim):
     [
         ({"type": "solar"}, r"plugins\[0\]\.type: unknown plugin 'solar'; known: \[.*'battery'"),
         (
-            {"type": "battery", "class": "fleet_async.core.agent_plugins.BatteryPlugin"},
+            {"type": "battery", "class": "fleet_async.core.agents.agent_plugins.BatteryPlugin"},
             r"plugins\[0\]: give exactly one of 'type' or 'class'",
         ),
         ({"config": {}}, r"plugins\[0\]: give exactly one of 'type' or 'class'"),
         ({"type": "battery", "settings": {}}, r"plugins\[0\]: unknown key\(s\) \['settings'\]"),
         (
-            {"class": "fleet_async.core.geometry.Pose"},
-            r"plugins\[0\]\.class: 'fleet_async\.core\.geometry\.Pose' is not an AgentPlugin",
+            {"class": "fleet_async.core.geometry.pose.Pose"},
+            r"plugins\[0\]\.class: 'fleet_async\.core\.geometry\.pose\.Pose' is not an AgentPlugin",
         ),
         ({"type": "battery", "config": {"capacity": 1}}, "capacity"),
     ],

@@ -16,7 +16,7 @@ from fleet_async import (
     SimObjectSpawnParams,
     SpatialHashCellSizeMode,
 )
-from fleet_async.core.broadphase import aabb_overlap, candidate_pairs
+from fleet_async.core.collision.broadphase import aabb_overlap, candidate_pairs
 from tests.conftest import headless_params
 
 HALF = 0.1

@@ -10,7 +10,7 @@ from typing import Any, Optional, Union
 
 import pytest
 
-from fleet_async.core.config_utils import (
+from fleet_async.core.base.config_utils import (
     dataclass_from_dict,
     forward_spawn_params,
     load_config,

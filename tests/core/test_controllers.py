@@ -25,7 +25,7 @@ from fleet_async import (
     create_controller,
     register_controller,
 )
-from fleet_async.core.controllers import CONTROLLER_REGISTRY
+from fleet_async.core.motion.controllers import CONTROLLER_REGISTRY
 from tests.conftest import headless_params
 
 DT = 0.1
@@ -182,7 +182,7 @@ def test_mapping_without_type_keeps_the_default_base(sim, motion_mode, cls):
 
 def test_class_path_selects_the_controller(sim):
     agent = spawn(
-        sim, {"class": "fleet_async.core.controllers.OmniController", "max_angular_vel": 1.0}
+        sim, {"class": "fleet_async.core.motion.controllers.OmniController", "max_angular_vel": 1.0}
     )
     assert type(agent.controller) is OmniController
     assert agent.motion_mode is MotionMode.OMNIDIRECTIONAL
@@ -295,7 +295,7 @@ def test_per_axis_limit_caps_each_axis_of_the_motion(sim):
         ({"type": "differential", "wheel_base": 0.4}, "wheel_base"),
         ({"type": "patrol", "waypoints": [[1, 0, 0]], "speed": 1.0}, "speed"),
         (
-            {"type": "omni", "class": "fleet_async.core.controllers.OmniController"},
+            {"type": "omni", "class": "fleet_async.core.motion.controllers.OmniController"},
             "either 'type' or 'class', not both",
         ),
         ({"type": "omni", "max_linear_vel": -1.0}, r"max_linear_vel.*-1\.0"),
@@ -306,8 +306,8 @@ def test_per_axis_limit_caps_each_axis_of_the_motion(sim):
         ({"type": "omni", "max_angular_accel": [1.0, -2.0, 3.0]}, "max_angular_accel"),
         ({"max_linear_vel": [1.0, 2.0, 3.0, 4.0]}, "max_linear_vel"),
         (
-            {"class": "fleet_async.core.geometry.Pose"},
-            r"controller\.class: 'fleet_async\.core\.geometry\.Pose' is not a Controller",
+            {"class": "fleet_async.core.geometry.pose.Pose"},
+            r"controller\.class: 'fleet_async\.core\.geometry\.pose\.Pose' is not a Controller",
         ),
         ({"type": "differential", "wheel_separation": 0.0}, "wheel_separation"),
         ({"type": "patrol", "waypoints": []}, "PatrolController.waypoints"),
@@ -371,7 +371,7 @@ def test_two_base_controllers_in_a_list_is_a_value_error(sim):
 
 
 def test_differential_type_under_omni_motion_mode_warns(sim, caplog):
-    with caplog.at_level("WARNING", logger="fleet_async.core.controllers"):
+    with caplog.at_level("WARNING", logger="fleet_async.core.motion.controllers"):
         agent = spawn(sim, "differential", motion_mode="omnidirectional")
     assert type(agent.controller) is DifferentialController
     assert "overrides motion_mode=omnidirectional" in caplog.text
@@ -450,7 +450,7 @@ def test_set_controller_none_disables_movement(sim, caplog):
     agent.set_controller(None)
     assert agent.controller is None and agent.controllers == [] and agent.motion_slot == -1
     assert limits_of(agent.controller_params) == DEFAULT_LIMITS
-    with caplog.at_level("WARNING", logger="fleet_async.core.agent"):
+    with caplog.at_level("WARNING", logger="fleet_async.core.agents.agent_motion"):
         agent.set_goal_pose(Pose.from_xyz(1.0, 0.0, 0.1))
     assert "no base controller" in caplog.text
     for _ in range(10):
@@ -639,7 +639,7 @@ def test_create_controller_forms():
     assert type(omni) is OmniController and omni.params.max_linear_vel == 0.8
     diff = create_controller({"type": "differential", "wheel_separation": 0.6})
     assert type(diff) is DifferentialController and diff.wheel_separation == 0.6
-    walk = create_controller({"class": "fleet_async.core.controllers.RandomWalkController"})
+    walk = create_controller({"class": "fleet_async.core.motion.controllers.RandomWalkController"})
     assert type(walk) is RandomWalkController and walk.radius == 5.0
     with pytest.raises(ValueError, match=r"robots\[3\]\.controller\.type: unknown controller"):
         create_controller({"type": "hover"}, where="robots[3].controller")

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from fleet_async.core.logging_utils import (
+from fleet_async.core.base.logging_utils import (
     LazyLogger,
     NamedLazyLogger,
     get_lazy_logger,
@@ -201,7 +201,7 @@ def test_lazy_log_passes_lazy_loggers_through() -> None:
 
 def test_import_has_no_logging_side_effects() -> None:
     code = (
-        "import logging, fleet_async.core.logging_utils as m\n"
+        "import logging, fleet_async.core.base.logging_utils as m\n"
         "root = logging.getLogger()\n"
         "assert root.handlers == [] and root.level == logging.WARNING, root\n"
         "assert logging.getLogger(m.__name__).handlers == []\n"

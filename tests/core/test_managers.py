@@ -29,7 +29,7 @@ from fleet_async import (
     WaitAction,
     register_entity_class,
 )
-from fleet_async.core import managers
+from fleet_async.core.managers import sim_object_manager as managers
 
 BOX = ShapeParams("box", half_extents=[0.2, 0.2, 0.1])
 
@@ -368,7 +368,7 @@ class Forklift(Agent):
 def test_register_entity_class_adds_a_type(sim, monkeypatch):
     monkeypatch.setattr(managers, "ENTITY_REGISTRY", dict(managers.ENTITY_REGISTRY))
     register_entity_class("forklift", Forklift)
-    register_entity_class("agent_by_path", "fleet_async.core.agent.Agent")
+    register_entity_class("agent_by_path", "fleet_async.core.agents.agent.Agent")
     objs = AgentManager(sim).spawn_from_config([{"type": "forklift"}, {"type": "agent_by_path"}])
     assert [type(o) for o in objs] == [Forklift, Agent]
     with pytest.raises(TypeError, match="not a SimObject subclass"):
@@ -448,7 +448,7 @@ def test_sim_reset_clears_the_manager_and_it_keeps_working(sim):
 def test_add_object_skips_objects_outside_a_simulation(sim, caplog):
     manager = SimObjectManager(sim)
     standalone = SimObject(body_id=-1)
-    with caplog.at_level(logging.WARNING, logger="fleet_async.core.managers"):
+    with caplog.at_level(logging.WARNING, logger="fleet_async.core.managers.sim_object_manager"):
         manager.add_object(standalone)
     assert manager.objects == [] and "not part of a simulation" in caplog.text
 
@@ -472,7 +472,7 @@ def test_add_object_refuses_another_simulations_object(sim, seeded_sim):
 
 def test_enable_profiling_logs_spawn_time(sim, caplog):
     manager = SimObjectManager(sim, enable_profiling=True)
-    with caplog.at_level(logging.INFO, logger="fleet_async.core.managers"):
+    with caplog.at_level(logging.INFO, logger="fleet_async.core.managers.sim_object_manager"):
         manager.spawn_objects_batch([box_params()])
     assert "spawn_objects_batch: spawned 1 objects" in caplog.text
 
@@ -684,13 +684,18 @@ def test_batch_controller_argument_and_dotted_paths(sim):
     manager = AgentManager(sim, batch_controller="batch_differential")
     (agent,) = manager.spawn_objects_batch([agent_params(controller="omni")])
     assert type(agent.controller) is DifferentialController
-    manager.enable_batch("fleet_async.core.controllers.OmniController")
+    manager.enable_batch("fleet_async.core.motion.controllers.OmniController")
     assert type(agent.controller) is OmniController
 
 
 @pytest.mark.parametrize(
     "mode",
-    ["batch_warp", "omni", "fleet_async.core.controllers.PatrolController", "no_such.Module"],
+    [
+        "batch_warp",
+        "omni",
+        "fleet_async.core.motion.controllers.PatrolController",
+        "no_such.Module",
+    ],
 )
 def test_enable_batch_rejects_unknown_modes(sim, mode):
     manager = AgentManager(sim)

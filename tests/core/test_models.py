@@ -10,7 +10,7 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from fleet_async.core.models import (
+from fleet_async.core.bodies.models import (
     PROJECT_ROBOTS_DIR,
     add_model_search_path,
     list_model_search_paths,

@@ -3,7 +3,7 @@ from __future__ import annotations
 import logging
 
 from fleet_async import DataMonitor
-from fleet_async.core.monitor import SimulationMonitor
+from fleet_async.core.view.monitor import SimulationMonitor
 
 
 def test_headless_monitor_writes_figures_to_the_log(monkeypatch, caplog):
@@ -11,7 +11,7 @@ def test_headless_monitor_writes_figures_to_the_log(monkeypatch, caplog):
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     monitor = DataMonitor(title="Fleet", enable_gui=True)
     assert DataMonitor.window_possible() is False
-    with caplog.at_level(logging.INFO, logger="fleet_async.core.monitor"):
+    with caplog.at_level(logging.INFO, logger="fleet_async.core.view.monitor"):
         monitor.start()
         assert monitor.uses_window is False
         monitor.write_data({"sim_time": 1.5, "objects": 3})
@@ -35,7 +35,7 @@ def test_simulation_monitor_rate_limits_and_computes_rtf(monkeypatch):
             written.append(data)
 
     times = iter([0.0, 0.5, 1.0, 2.5])
-    monkeypatch.setattr("fleet_async.core.monitor.time.perf_counter", lambda: next(times))
+    monkeypatch.setattr("fleet_async.core.view.monitor.time.perf_counter", lambda: next(times))
     mon = SimulationMonitor(Sink(), period_s=1.0)  # type: ignore[arg-type]
     assert mon.update(0.0, 0, 5, 2, 0) is True
     assert mon.update(5.0, 50, 5, 2, 0) is False  # half a second later: not yet

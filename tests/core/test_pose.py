@@ -10,8 +10,8 @@ import numpy as np
 import pybullet as p
 import pytest
 
-from fleet_async.core.pose import Pose
-from fleet_async.core.quaternions import quat_angle_between
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.quaternions import quat_angle_between
 
 FLOAT32_TOL = 2e-6
 S = math.sqrt(0.5)

@@ -12,7 +12,7 @@ import numpy as np
 import pybullet as p
 import pytest
 
-from fleet_async.core.quaternions import (
+from fleet_async.core.geometry.quaternions import (
     SlerpPrecomp,
     compose_poses_batch,
     euler_from_quat,

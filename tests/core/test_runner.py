@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import pytest
 
-from fleet_async.core.runner import RealTimePacer
+from fleet_async.core.view.runner import RealTimePacer
 
 
 class FakeClock:

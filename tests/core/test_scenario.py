@@ -1,4 +1,4 @@
-"""Scenarios: a whole simulation from one mapping or YAML file (fleet_async/core/scenario.py)."""
+"""Scenarios: a whole simulation from one mapping or YAML file (core/scenario/build.py)."""
 
 from __future__ import annotations
 
@@ -24,8 +24,9 @@ from fleet_async import (
     SimObjectManager,
     SimPlugin,
 )
-from fleet_async.core import managers, scenario
-from fleet_async.core.config_utils import load_yaml_config
+from fleet_async.core.base.config_utils import load_yaml_config
+from fleet_async.core.managers import sim_object_manager as managers
+from fleet_async.core.scenario import build as scenario
 
 DATA = FsPath(__file__).resolve().parent.parent / "data" / "scenarios"
 EXAMPLES = sorted((FsPath(__file__).resolve().parents[2] / "examples" / "scenarios").glob("*.yaml"))

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import pytest
 
-from fleet_async.core.scheduling import PeriodicSchedule
+from fleet_async.core.base.scheduling import PeriodicSchedule
 
 
 def _run(schedule, steps, dt):

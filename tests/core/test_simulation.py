@@ -313,7 +313,7 @@ def test_monitor_figures_go_to_the_log_headless(caplog, monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     with MultiRobotSimulationCore(headless_params(monitor=True, log_level="info")) as msim:
         box(msim)
-        with caplog.at_level(logging.INFO, logger="fleet_async.core.monitor"):
+        with caplog.at_level(logging.INFO, logger="fleet_async.core.view.monitor"):
             msim.run_simulation(duration=1.0)
     text = caplog.text
     assert (
@@ -359,7 +359,7 @@ def test_time_profiling_logs_a_summary_every_interval(caplog):
     params = headless_params(enable_time_profiling=True, profiling_interval=5, log_level="info")
     with (
         MultiRobotSimulationCore(params) as psim,
-        caplog.at_level(logging.INFO, logger="fleet_async.core.profiling"),
+        caplog.at_level(logging.INFO, logger="fleet_async.core.sim.profiling"),
     ):
         for _ in range(10):
             psim.step_once()

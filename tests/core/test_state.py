@@ -3,7 +3,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fleet_async.core.state import KinematicState
+from fleet_async.core.world.state import KinematicState
 
 
 def test_allocate_fills_row_and_flags():

@@ -11,21 +11,21 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from fleet_async.core.geometry import Pose
-from fleet_async.core.tools import (
-    body_to_world_velocity_2d,
-    body_to_world_velocity_3d,
-    calculate_offset_pose,
-    find_nearest,
+from fleet_async.core.geometry.approach import calculate_offset_pose, find_nearest
+from fleet_async.core.geometry.grids import (
     grid_execution,
     grid_to_world,
     grid_to_world_2d,
-    normalize_vector_param,
-    resolve_joint_index,
-    resolve_link_index,
     world_to_grid,
     world_to_grid_2d,
 )
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.vectors import (
+    body_to_world_velocity_2d,
+    body_to_world_velocity_3d,
+    normalize_vector_param,
+)
+from fleet_async.core.world.links import resolve_joint_index, resolve_link_index
 
 # ----- velocities ------------------------------------------------------------------------
 

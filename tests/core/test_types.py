@@ -15,7 +15,7 @@ from fleet_async import (
     PosePhase,
     SpatialHashCellSizeMode,
 )
-from fleet_async.core.types import coerce_enum
+from fleet_async.core.base.types import coerce_enum
 
 EXPECTED = {
     MotionMode: ["omnidirectional", "differential"],

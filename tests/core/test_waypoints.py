@@ -9,9 +9,9 @@ import numpy as np
 import pybullet as p
 import pytest
 
-from fleet_async.core.pose import Pose
-from fleet_async.core.quaternions import quat_from_euler, rotate_vector
-from fleet_async.core.waypoints import Path
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.quaternions import quat_from_euler, rotate_vector
+from fleet_async.core.geometry.waypoints import Path
 
 S = math.sqrt(0.5)
 

@@ -19,8 +19,8 @@ from fleet_async import (
     SimObject,
     WorldLoadError,
 )
-from fleet_async.core import world_loader
-from fleet_async.core.shapes import body_collision_shape
+from fleet_async.core.scenario import world_loader
+from fleet_async.core.world.shapes import body_collision_shape
 from tests.conftest import headless_params
 
 ROOT = Path(__file__).resolve().parent.parent.parent
@@ -136,7 +136,7 @@ def test_skip_models_by_include_name_or_uri_model_name(sim, caplog):
     objs = sim.load_world({"world_file": str(WORLD), "skip_models": ["meshy"]}, ["test_box"])
     assert [o.name for o in objs] == ["pair", "inline_wall"]  # test_box skipped all 3 includes
     sim.reset()
-    with caplog.at_level(logging.WARNING, logger="fleet_async.core.world_loader"):
+    with caplog.at_level(logging.WARNING, logger="fleet_async.core.scenario.world_loader"):
         objs = sim.load_world({"world_file": str(WORLD)}, ["inline_wall", "robot_spot", "nobody"])
     assert [o.name for o in objs] == ["box_a", "test_box", "pair", "meshy"]
     assert "skip_models ['nobody'] matched nothing" in caplog.text
@@ -386,7 +386,7 @@ def test_every_failure_is_reported_by_name_and_nothing_stays_loaded(sim, tmp_pat
 
 def test_on_error_warn_logs_each_failure_and_returns_what_loaded(sim, tmp_path, caplog):
     world = broken_world(tmp_path)
-    with caplog.at_level(logging.WARNING, logger="fleet_async.core.world_loader"):
+    with caplog.at_level(logging.WARNING, logger="fleet_async.core.scenario.world_loader"):
         objs = sim.load_world({"world_file": str(world), "on_error": "warn"})
     assert [o.name for o in objs] == ["good_one"]
     assert np.allclose(objs[0].get_pose().position, [1.0, 0.0, 0.0])
@@ -427,7 +427,7 @@ def test_include_errors_in_the_world_itself_are_named(sim, tmp_path, caplog):
     )
     with (
         pytest.raises(WorldLoadError) as info,
-        caplog.at_level(logging.WARNING, logger="fleet_async.core.world_loader"),
+        caplog.at_level(logging.WARNING, logger="fleet_async.core.scenario.world_loader"),
     ):
         sim.load_world({"world_file": str(world)})
     assert "<actor name='walker'> is not loaded (not supported)" in caplog.text

@@ -1,0 +1,253 @@
+"""Per-agent action queues, advanced by events rather than by polling every agent.
+
+Each agent has a FIFO of actions and at most one current action. In a step's action tick the
+runner advances only agents that need it: an agent whose action asked to be polled, one whose
+timer came due, or one with a new action queued. Actions waiting for motion are woken by the
+kinematic engine when the agent stops. Agents are always advanced in ascending object id, so
+the order never depends on dict or set iteration.
+"""
+
+from __future__ import annotations
+
+import functools
+import heapq
+from collections import deque
+from typing import TYPE_CHECKING
+
+from fleet_async.core.actions.action import Action
+from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.types import ActionStatus
+
+if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = ["ActionQueue"]
+
+_EPS = 1e-9
+
+
+class ActionQueue:
+    """Every agent's action queue in one simulation."""
+
+    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+        self._sim = sim
+        self._queued: dict[int, deque[Action]] = {}
+        self._current: dict[int, Action] = {}
+        self._agents: dict[int, Agent] = {}
+        self._due: set[int] = set()  # agents to advance at the next tick
+        self._on_motion: set[int] = set()  # agents whose action waits for motion to end
+        self._timers: list[tuple[float, int, int, Action]] = []
+        self._seq = 0
+        self.now = 0.0
+        """Sim time the queue is acting at: the step's start in the tick, its end after motion."""
+
+    # ----- queries ------------------------------------------------------------------------
+
+    def current(self, agent: Agent) -> Action | None:
+        """The action ``agent`` is executing, or None."""
+        return self._current.get(agent.object_id)
+
+    def queued(self, agent: Agent) -> int:
+        """Number of actions waiting behind the current one."""
+        return len(self._queued.get(agent.object_id, ()))
+
+    def is_idle(self, agent: Agent) -> bool:
+        """No current action and nothing queued."""
+        return agent.object_id not in self._current and not self._queued.get(agent.object_id)
+
+    # ----- commands -----------------------------------------------------------------------
+
+    def submit(self, agent: Agent, action: Action) -> None:
+        """Queue ``action`` for ``agent``; it starts at the next action tick.
+
+        Raises:
+            TypeError: if ``action`` is not an Action.
+            ValueError: if it is already queued, running or finished (``reset`` it first).
+        """
+        if not isinstance(action, Action):
+            raise TypeError(f"add_action: expected an Action, got {action!r}")
+        if action.status is not ActionStatus.NOT_STARTED:
+            raise ValueError(
+                f"add_action: {type(action).__name__} is {action.status.value}; "
+                "reset() it to reuse it"
+            )
+        if action.in_queue:
+            raise ValueError(f"add_action: this {type(action).__name__} is already queued")
+        key = agent.object_id
+        self._agents[key] = agent
+        self._queued.setdefault(key, deque()).append(action)
+        action.bind_cancel_hook(functools.partial(self._cancelled, agent))
+        self._due.add(key)
+
+    def clear(self, agent: Agent) -> None:
+        """Cancel the current action and drop every queued one (each marked CANCELLED)."""
+        for action in list(self._queued.get(agent.object_id, ())):
+            action.cancel()
+        current = self._current.get(agent.object_id)
+        if current is not None:
+            current.cancel()
+
+    def forget(self, agent: Agent, reason: str = "its agent left the simulation") -> None:
+        """Drop the agent's actions: each ends CANCELLED with ``reason`` (ACTION_FAILED is
+        emitted), so nobody waiting on one waits forever."""
+        key = agent.object_id
+        dropped = [
+            *([self._current.pop(key)] if key in self._current else []),
+            *self._queued.pop(key, ()),
+        ]
+        self._agents.pop(key, None)
+        self._due.discard(key)
+        self._on_motion.discard(key)
+        for action in dropped:
+            action.bind_cancel_hook(None)
+            if not action.is_complete():
+                action.status = ActionStatus.CANCELLED
+                action.error_message = reason
+                action.end_time = self._sim.sim_time
+                self._emit(SimEvents.ACTION_FAILED, agent, action)
+
+    def reset(self) -> None:
+        """Forget every queue (simulation reset); unfinished actions end CANCELLED."""
+        for key in sorted(set(self._queued) | set(self._current)):
+            agent = self._agents.get(key)
+            if agent is not None:
+                self.forget(agent, "the simulation was reset")
+        self._queued.clear()
+        self._current.clear()
+        self._agents.clear()
+        self._due.clear()
+        self._on_motion.clear()
+        self._timers.clear()
+
+    # ----- driving ------------------------------------------------------------------------
+
+    def tick(self, now: float, dt: float) -> None:
+        """Advance the agents that are due at sim time ``now`` (before motion)."""
+        self.now = now
+        self._expire_timers(now)
+        if not self._due:
+            return
+        due, self._due = sorted(self._due), set()
+        for key in due:
+            agent = self._agents.get(key)
+            if agent is not None:
+                self._advance(agent, now, dt)
+
+    def expire(self, end: float, dt: float) -> None:
+        """After motion: finish timed actions that are due by the step's end time ``end``.
+
+        A WaitAction that ends at the instant this step reaches completes now, with that end
+        time, so whoever waits on it resumes at the right instant; the next queued action then
+        starts in the following step's tick, at the same sim time.
+        """
+        if not self._timers or self._timers[0][0] > end + _EPS:
+            return
+        self.now = end
+        for key in sorted(self._expire_timers(end)):
+            agent = self._agents.get(key)
+            action = self._current.get(key)
+            if agent is None or action is None:
+                continue
+            if self._execute(agent, action, dt):
+                self._complete(agent, action, end)  # stays due: the next action starts next tick
+            else:
+                self._due.discard(key)
+                self._park(agent, action)
+
+    def _expire_timers(self, now: float) -> set[int]:
+        expired: set[int] = set()
+        while self._timers and self._timers[0][0] <= now + _EPS:
+            _, _, key, action = heapq.heappop(self._timers)
+            if self._current.get(key) is action:
+                self._due.add(key)
+                expired.add(key)
+        return expired
+
+    def on_motion_end(self, agent: Agent, now: float, dt: float) -> None:
+        """The engine stopped ``agent`` (during motion; ``now`` is the end of the step)."""
+        key = agent.object_id
+        if key not in self._on_motion:
+            return
+        self._on_motion.discard(key)
+        action = self._current.get(key)
+        if action is None:
+            return
+        if self._execute(agent, action, dt):
+            self._complete(agent, action, now)
+            self._due.add(key)  # the next action starts at the next tick
+        else:
+            self._park(agent, action)
+
+    def _advance(self, agent: Agent, now: float, dt: float) -> None:
+        key = agent.object_id
+        while True:
+            action = self._current.get(key)
+            if action is None:
+                queue = self._queued.get(key)
+                if not queue:
+                    return
+                action = queue.popleft()
+                self._current[key] = action
+                action.status = ActionStatus.IN_PROGRESS
+                action.start_time = now
+                self._emit(SimEvents.ACTION_STARTED, agent, action)
+            if not self._execute(agent, action, dt):
+                self._park(agent, action)
+                return
+            self._complete(agent, action, now)
+
+    def _execute(self, agent: Agent, action: Action, dt: float) -> bool:
+        try:
+            return bool(action.execute(agent, dt))
+        except Exception as exc:
+            action.fail(f"{type(exc).__name__}: {exc}")
+            self._complete(agent, action, self._sim.sim_time)
+            raise
+
+    def _park(self, agent: Agent, action: Action) -> None:
+        kind, when = action.wait_hint()
+        key = agent.object_id
+        if kind == "motion":
+            self._on_motion.add(key)
+        elif kind == "time" and when is not None:
+            self._seq += 1
+            heapq.heappush(self._timers, (when, self._seq, key, action))
+        else:
+            self._due.add(key)
+
+    def _complete(self, agent: Agent, action: Action, now: float) -> None:
+        if action.status is ActionStatus.IN_PROGRESS:
+            action.status = ActionStatus.COMPLETED
+        action.end_time = now
+        action.bind_cancel_hook(None)
+        self._current.pop(agent.object_id, None)
+        self._on_motion.discard(agent.object_id)
+        event = (
+            SimEvents.ACTION_COMPLETED
+            if action.status is ActionStatus.COMPLETED
+            else SimEvents.ACTION_FAILED
+        )
+        self._emit(event, agent, action)
+
+    def _cancelled(self, agent: Agent, action: Action) -> None:
+        key = agent.object_id
+        queue = self._queued.get(key)
+        if queue is not None and any(a is action for a in queue):
+            queue.remove(action)
+            action.end_time = self._sim.sim_time
+            return
+        if self._current.get(key) is not action:
+            return
+        self._current.pop(key)
+        self._on_motion.discard(key)
+        agent.stop()
+        action.on_cancel(agent)
+        action.end_time = self._sim.sim_time
+        self._due.add(key)
+        self._emit(SimEvents.ACTION_FAILED, agent, action)
+
+    def _emit(self, event: str, agent: Agent, action: Action) -> None:
+        self._sim.events.emit(event, agent=agent, action=action)
+        if agent.has_event_bus():
+            agent.events.emit(event, agent=agent, action=action)

@@ -1,0 +1,72 @@
+"""AgentSpawnParams: what it takes to create an Agent (IKParams, its IK part, lives with the
+solver in ``motion/ik.py`` and is re-exported here)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from fleet_async.core.base.config_utils import dataclass_from_dict
+from fleet_async.core.base.types import MotionMode, coerce_enum
+from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.motion.ik import IKParams
+
+__all__ = ["AgentSpawnParams", "IKParams"]
+
+
+@dataclass
+class AgentSpawnParams(SimObjectSpawnParams):
+    """Parameters for spawning an Agent: a mesh robot, a URDF robot or a virtual agent.
+
+    Give ``visual_shape`` / ``collision_shape`` for a mesh robot, ``urdf_path`` (a file or a
+    model name such as "mobile_robot" or "panda") for a URDF robot, or neither for a virtual
+    agent (no geometry, no collision).
+
+    Attributes:
+        urdf_path: URDF file or model name.
+        motion_mode: Default base controller when ``controller`` names none (deprecated
+            shortcut; prefer ``controller="omni"`` / ``"differential"``).
+        use_fixed_base: The base never moves (arms on a table).
+        ik_params: IK settings for arms.
+        controller: Controller selector or configuration (see ``Agent``).
+        plugins: Per-agent plugin entries ``{"type": "battery", "config": {...}}``.
+    """
+
+    urdf_path: str | None = None
+    motion_mode: MotionMode = MotionMode.DIFFERENTIAL
+    use_fixed_base: bool = False
+    ik_params: IKParams | None = None
+    controller: Any = None
+    plugins: list[dict[str, Any]] | None = None
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.motion_mode = coerce_enum(MotionMode, self.motion_mode, "AgentSpawnParams.motion_mode")
+        if self.urdf_path is not None and not isinstance(self.urdf_path, str):
+            raise ValueError(
+                f"AgentSpawnParams.urdf_path: expected a path or model name, got {self.urdf_path!r}"
+            )
+        if isinstance(self.ik_params, dict):
+            self.ik_params = dataclass_from_dict(IKParams, self.ik_params, section="ik_params")
+        if self.plugins is not None and not (
+            isinstance(self.plugins, list) and all(isinstance(e, dict) for e in self.plugins)
+        ):
+            raise ValueError(
+                f"AgentSpawnParams.plugins: expected a list of mappings, got {self.plugins!r}"
+            )
+
+    @classmethod
+    def from_dict(cls, config: dict[str, Any], *, source: str | None = None) -> AgentSpawnParams:
+        """Build from a programmatic or YAML-style mapping (``pose`` + ``yaw`` accepted)."""
+        params = super().from_dict(config, source=source)
+        assert isinstance(params, AgentSpawnParams)
+        return params
+
+    @property
+    def kind(self) -> str:
+        """ "urdf", "mesh" or "virtual"."""
+        if self.urdf_path:
+            return "urdf"
+        if self.visual_shape is not None or self.collision_shape is not None:
+            return "mesh"
+        return "virtual"

@@ -1,0 +1,6 @@
+"""Bottom layer: what every other layer uses.
+
+Enums (``types``), the event bus (``events``), sim-time schedules (``scheduling``), config
+mapping and YAML reading (``config_utils``), lazy loggers (``logging_utils``) and data-file
+lookup (``paths``). Imports nothing else from ``fleet_async``.
+"""

@@ -1,0 +1,492 @@
+"""SimObject: a handle onto one row of the simulation's state store.
+
+A SimObject owns no pose of its own: ``get_pose`` reads the store, ``set_pose`` writes it and
+marks the row dirty. An object created without a simulation keeps a private one-row store and
+talks to PyBullet client 0 directly, until ``sim.add_object`` adopts it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+import pybullet as p
+
+from fleet_async.core.base.events import EventBus
+from fleet_async.core.base.logging_utils import NamedLazyLogger
+from fleet_async.core.base.scheduling import PeriodicSchedule
+from fleet_async.core.base.types import CollisionMode, coerce_enum
+from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.bodies.spawning import (
+    create_bodies,
+    create_body,
+    load_sdf_objects,
+    wrap_all,
+)
+from fleet_async.core.geometry.approach import find_nearest
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.vectors import as_orientation, as_position
+from fleet_async.core.world.shapes import ShapeParams, get_or_create_shapes
+from fleet_async.core.world.state import COLLISION_CODES, KinematicState
+
+if TYPE_CHECKING:
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = ["ShapeParams", "SimObject", "SimObjectSpawnParams"]
+
+
+class SimObject:
+    """A body in the simulation: robot, pallet, shelf or marker.
+
+    Args:
+        body_id: PyBullet body unique id (-1 for a virtual object with no body).
+        sim_core: The simulation to join; None keeps the object standalone.
+        pickable: Whether pick actions may pick it.
+        mass: kg; None reads the body's base mass from PyBullet.
+        collision_mode: How it takes part in collision detection.
+        name: Human-readable name (duplicates allowed).
+        user_data: Free-form metadata.
+        register: Join ``sim_core`` now (subclasses pass False and call ``add_object`` once
+            their own state is ready).
+
+    Attributes:
+        object_id: Unique id assigned by the simulation (-1 while standalone).
+        name: Human-readable name.
+        body_id: PyBullet body id.
+        mass: kg.
+        pickable: Whether it can be picked.
+        user_data: Free-form metadata.
+        sim_core: The simulation it belongs to, or None.
+    """
+
+    _spawn_params_cls: ClassVar[type[SimObjectSpawnParams]] = SimObjectSpawnParams
+    spawned_event: ClassVar[str | None] = None
+    """Extra event the simulation emits when an object of this class spawns (e.g. agents)."""
+    removed_event: ClassVar[str | None] = None
+    """Extra event the simulation emits when an object of this class is removed."""
+    is_agent: ClassVar[bool] = False
+    """Whether the simulation lists objects of this class in ``sim.agents``."""
+    _store: KinematicState
+
+    def __init__(
+        self,
+        body_id: int,
+        sim_core: MultiRobotSimulationCore | None = None,
+        pickable: bool = True,
+        mass: float | None = None,
+        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
+        name: str | None = None,
+        user_data: dict[str, Any] | None = None,
+        *,
+        register: bool = True,
+    ) -> None:
+        self.body_id = int(body_id)
+        self.object_id = -1
+        self.name = name
+        self.pickable = bool(pickable)
+        self.user_data: dict[str, Any] = {} if user_data is None else user_data
+        self.sim_core: MultiRobotSimulationCore | None = None
+        self._collision_mode = coerce_enum(CollisionMode, collision_mode, "collision_mode")
+        self._events: EventBus | None = None
+        self._callbacks = PeriodicSchedule()
+        self._log = NamedLazyLogger(__name__)
+        self._row = -1  # no row until bound to a simulation or given a standalone store
+        if sim_core is not None:
+            self.mass = float(mass) if mass is not None else sim_core.body_mass(self.body_id)
+            if register:  # subclasses that finish their own setup first pass False and add later
+                sim_core.add_object(self)
+        else:
+            self.mass = float(mass) if mass is not None else self._standalone_mass()
+            self._store = KinematicState(1)
+            self._row = self._store.allocate(
+                -1,
+                self.body_id,
+                *self._standalone_pose(),
+                collision_code=COLLISION_CODES[self._collision_mode.value],
+            )
+        self._refresh_log_prefix()
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(object_id={self.object_id}, name={self.name!r}, "
+            f"body_id={self.body_id})"
+        )
+
+    # ----- binding to a simulation (called by MultiRobotSimulationCore) -------------------
+
+    def bind(
+        self, sim: MultiRobotSimulationCore, store: KinematicState, row: int, object_id: int
+    ) -> None:
+        """Adopt a row in ``sim``'s store. Called by ``sim.add_object``; not for users."""
+        self.sim_core = sim
+        self._store = store
+        self._row = row
+        self.object_id = object_id
+        self._refresh_log_prefix()
+
+    def on_removed(self) -> None:
+        """Called by the simulation just before the object leaves it (subclass hook)."""
+
+    def unbind(self) -> None:
+        """Leave the simulation, keeping the last pose in a private row."""
+        pos, orn = self._store.position[self._row].copy(), self._store.orientation[self._row].copy()
+        self._store = KinematicState(1)
+        self._row = self._store.allocate(
+            -1, self.body_id, pos, orn, collision_code=COLLISION_CODES[self._collision_mode.value]
+        )
+        self.sim_core = None
+        self.object_id = -1
+
+    @property
+    def state_row(self) -> int:
+        """Row of this object in the state store (stable for its lifetime in a simulation)."""
+        return self._row
+
+    # ----- identity, flags, events --------------------------------------------------------
+
+    def set_name(self, name: str | None) -> None:
+        """Rename the object and refresh its log prefix."""
+        self.name = name
+        self._refresh_log_prefix()
+
+    @property
+    def events(self) -> EventBus:
+        """Per-entity event bus, created on first access."""
+        if self._events is None:
+            self._events = EventBus()
+        return self._events
+
+    def has_event_bus(self) -> bool:
+        """Whether anyone has asked for this object's bus yet (emitters skip it otherwise)."""
+        return self._events is not None
+
+    @property
+    def collision_mode(self) -> CollisionMode:
+        """How the object takes part in collision detection."""
+        return self._collision_mode
+
+    @property
+    def is_static(self) -> bool:
+        """Whether the object is STATIC (never moves)."""
+        return self._collision_mode is CollisionMode.STATIC
+
+    def set_collision_mode(self, mode: CollisionMode | str) -> None:
+        """Change the collision mode; DISABLED also turns off PyBullet contacts."""
+        mode = coerce_enum(CollisionMode, mode, "collision_mode")
+        if mode is self._collision_mode:
+            return
+        old, self._collision_mode = self._collision_mode, mode
+        self._store.collision_mode[self._row] = COLLISION_CODES[mode.value]
+        self._store.moved[self._row] = True
+        if self.sim_core is not None:
+            self.sim_core.world.on_collision_mode_changed(self, old, mode)
+
+    # ----- pose ---------------------------------------------------------------------------
+
+    def get_pose(self) -> Pose:
+        """Current pose in the world frame (a copy; read from the state store)."""
+        return Pose.from_arrays_unchecked(
+            self._store.position[self._row].copy(), self._store.orientation[self._row].copy()
+        )
+
+    def set_pose(self, pose: Pose, preserve_velocity: bool = True) -> bool:
+        """Move the object (and everything attached to it) to ``pose``.
+
+        Returns:
+            True if the pose changed, False if it already was ``pose``.
+        """
+        if not isinstance(pose, Pose):
+            raise TypeError(f"set_pose: expected a Pose, got {pose!r}")
+        return self._write_pose(pose.position, pose.orientation, preserve_velocity)
+
+    def set_pose_raw(
+        self,
+        position: Sequence[float] | np.ndarray,
+        orientation: Sequence[float] | np.ndarray,
+        preserve_velocity: bool = True,
+    ) -> bool:
+        """Like :meth:`set_pose` from raw ``[x, y, z]`` and ``[x, y, z, w]`` (validated).
+
+        Raises:
+            ValueError: for a wrong-length or non-finite position, or a zero quaternion.
+        """
+        return self._write_pose(
+            as_position(position), as_orientation(orientation), preserve_velocity
+        )
+
+    def _write_pose(self, pos: np.ndarray, orn: np.ndarray, preserve_velocity: bool) -> bool:
+        store, row = self._store, self._row
+        if np.array_equal(store.position[row], pos) and np.array_equal(store.orientation[row], orn):
+            return False
+        store.position[row] = pos
+        store.orientation[row] = orn
+        store.mark_moved(row)
+        if self.sim_core is not None:
+            self.sim_core.world.on_pose_written(self, preserve_velocity)
+        elif self.body_id >= 0:
+            p.resetBasePositionAndOrientation(self.body_id, pos.tolist(), orn.tolist())
+            store.dirty[row] = False
+        return True
+
+    # ----- attachments --------------------------------------------------------------------
+
+    def attach_object(
+        self,
+        obj: SimObject,
+        parent_link_index: int | str = -1,
+        relative_pose: Pose | None = None,
+        joint_type: int = p.JOINT_FIXED,
+        keep_world_pose: bool = False,
+    ) -> bool:
+        """Attach ``obj`` to one of this object's links; it follows that link every step.
+
+        Args:
+            obj: The object to carry.
+            parent_link_index: Link index, link name, -1 or "base_link".
+            relative_pose: Child pose in the link frame (default identity).
+            joint_type: Only ``pybullet.JOINT_FIXED`` is supported.
+            keep_world_pose: Compute ``relative_pose`` so the child stays where it is.
+
+        Returns:
+            True once attached.
+
+        Raises:
+            ValueError: attaching to itself, an object already attached (to this or another
+                parent), a cycle, objects of different simulations, an unknown link, both
+                ``relative_pose`` and ``keep_world_pose``, or an unsupported ``joint_type``.
+        """
+        return self._require_sim("attach_object").world.attach(
+            self, obj, parent_link_index, relative_pose, joint_type, keep_world_pose
+        )
+
+    def detach_object(
+        self, obj: SimObject, drop_pose: Pose | None = None, drop_relative_pose: Pose | None = None
+    ) -> bool:
+        """Detach ``obj``; optionally put it at ``drop_pose`` or offset by ``drop_relative_pose``.
+
+        Returns:
+            True if ``obj`` was attached to this object, False (with a warning) otherwise.
+
+        Raises:
+            ValueError: if both ``drop_pose`` and ``drop_relative_pose`` are given.
+        """
+        return self._require_sim("detach_object").world.detach(
+            self, obj, drop_pose, drop_relative_pose
+        )
+
+    def get_attached_objects(self) -> list[SimObject]:
+        """Objects attached to this one, in attachment order."""
+        return [] if self.sim_core is None else self.sim_core.attachments.children_of(self)
+
+    @property
+    def attached_objects(self) -> list[SimObject]:
+        """Objects attached to this one (same as :meth:`get_attached_objects`)."""
+        return self.get_attached_objects()
+
+    def is_attached(self) -> bool:
+        """Whether this object is carried by another."""
+        return self.sim_core is not None and self.sim_core.attachments.of_child(self) is not None
+
+    def get_attached_parent(self) -> SimObject | None:
+        """The object carrying this one, or None."""
+        att = None if self.sim_core is None else self.sim_core.attachments.of_child(self)
+        return None if att is None else att.parent
+
+    def find_nearest_pickable(self, search_radius: float = 1.0) -> SimObject | None:
+        """Nearest pickable, unattached object within ``search_radius`` metres of this one."""
+        if self.sim_core is None:
+            return None
+        return find_nearest(
+            self.sim_core.sim_objects,
+            self.get_pose().position,
+            search_radius,
+            predicate=lambda o: o.pickable and not o.is_attached(),
+            exclude=self,
+        )
+
+    # ----- per-object behaviour -----------------------------------------------------------
+
+    def update(self, dt: float) -> None:
+        """Per-step behaviour; subclasses override it and the simulation calls it each step."""
+
+    def overrides_update(self) -> bool:
+        """Whether this object's class overrides :meth:`update` (the simulation then calls it
+        every step; objects that do not cost nothing)."""
+        return type(self).update is not SimObject.update
+
+    def register_callback(
+        self, callback: Callable[[SimObject, float], Any], frequency: float = 0.25
+    ) -> None:
+        """Call ``callback(obj, dt)`` every ``1 / frequency`` seconds of sim time.
+
+        Raises:
+            ValueError: if ``frequency`` is not a number > 0.
+        """
+        self._callbacks.add(callback, frequency, owner=f"{self!r}.register_callback")
+        if self.sim_core is not None:
+            self.sim_core.world.on_object_callbacks_changed(self)
+
+    def unregister_callback(self, callback: Callable[..., Any]) -> bool:
+        """Remove a callback; return whether it was registered."""
+        return self._callbacks.remove(callback)
+
+    def has_callbacks(self) -> bool:
+        """Whether any per-object callbacks are registered."""
+        return len(self._callbacks) > 0
+
+    def execute_callbacks(self, current_time: float) -> None:
+        """Run the callbacks due at ``current_time`` (sim seconds)."""
+        for callback, dt in self._callbacks.due(current_time):
+            callback(self, dt)
+
+    def reset_callbacks(self) -> None:
+        """Restart the callback schedule from sim time 0."""
+        self._callbacks.reset()
+
+    # ----- constructors -------------------------------------------------------------------
+
+    @classmethod
+    def create_shared_shapes(
+        cls,
+        visual_shape: ShapeParams | None = None,
+        collision_shape: ShapeParams | None = None,
+        physics_client_id: int = 0,
+    ) -> tuple[int, int]:
+        """Return (visual_id, collision_id), reusing shapes with identical parameters."""
+        return get_or_create_shapes(visual_shape, collision_shape, physics_client_id)
+
+    @classmethod
+    def from_params(
+        cls, spawn_params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None = None
+    ) -> SimObject:
+        """Create the body described by ``spawn_params`` and wrap it.
+
+        Raises:
+            FileNotFoundError: for a mesh file that does not exist.
+            ValueError: for shapes PyBullet rejects.
+        """
+        body_id = create_body(spawn_params, sim_core)
+        return cls(
+            body_id,
+            sim_core=sim_core,
+            pickable=spawn_params.pickable,
+            mass=spawn_params.mass,
+            collision_mode=spawn_params.collision_mode,
+            name=spawn_params.name,
+            user_data=dict(spawn_params.user_data),
+        )
+
+    @classmethod
+    def spawn_batch(
+        cls, params_list: Sequence[SimObjectSpawnParams], sim_core: MultiRobotSimulationCore
+    ) -> list[SimObject]:
+        """Spawn many shape-based objects fast (bodies created in batches); input order kept.
+
+        If anything fails, nothing this call created is left behind.
+        """
+        params_list = list(params_list)
+        with sim_core.batch_spawn():
+            bodies = create_bodies(params_list, sim_core)
+            return wrap_all(
+                bodies,
+                lambda i, body: cls(
+                    body,
+                    sim_core=sim_core,
+                    pickable=params_list[i].pickable,
+                    mass=params_list[i].mass,
+                    collision_mode=params_list[i].collision_mode,
+                    name=params_list[i].name,
+                    user_data=dict(params_list[i].user_data),
+                ),
+                sim_core,
+            )
+
+    @classmethod
+    def from_mesh(
+        cls,
+        visual_shape: ShapeParams | None = None,
+        collision_shape: ShapeParams | None = None,
+        pose: Pose | None = None,
+        mass: float = 0.0,
+        pickable: bool = True,
+        sim_core: MultiRobotSimulationCore | None = None,
+        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
+        name: str | None = None,
+        user_data: dict[str, Any] | None = None,
+    ) -> SimObject:
+        """Create an object from visual and collision shapes (box, sphere, cylinder or mesh)."""
+        params = SimObjectSpawnParams(
+            visual_shape=visual_shape,
+            collision_shape=collision_shape,
+            initial_pose=pose if pose is not None else Pose([0.0, 0.0, 0.0]),
+            mass=mass,
+            pickable=pickable,
+            name=name,
+            collision_mode=collision_mode,  # type: ignore[arg-type]  # coerced in __post_init__
+            user_data=user_data or {},
+        )
+        return cls.from_params(params, sim_core)
+
+    @classmethod
+    def from_dict(
+        cls, config: dict[str, Any], sim_core: MultiRobotSimulationCore | None = None
+    ) -> SimObject:
+        """``from_params(_spawn_params_cls.from_dict(config))`` in one call."""
+        return cls.from_params(cls._spawn_params_cls.from_dict(config), sim_core)
+
+    @classmethod
+    def from_sdf(
+        cls,
+        sdf_path: str,
+        sim_core: MultiRobotSimulationCore | None = None,
+        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
+        global_scaling: float = 1.0,
+        name_prefix: str | None = None,
+        pickable: bool = False,
+        use_fixed_base: bool = True,
+    ) -> list[SimObject]:
+        """Load every body of an SDF file (``pybullet.loadSDF``) and wrap each one.
+
+        Raises:
+            FileNotFoundError: naming the paths tried when the file does not exist.
+            ValueError: if PyBullet cannot parse the file.
+        """
+        return load_sdf_objects(
+            cls,
+            sdf_path,
+            sim_core,
+            collision_mode,
+            global_scaling,
+            name_prefix,
+            pickable,
+            use_fixed_base,
+        )
+
+    # ----- helpers ------------------------------------------------------------------------
+
+    def _require_sim(self, what: str) -> MultiRobotSimulationCore:
+        if self.sim_core is None:
+            raise ValueError(f"{what}: {self!r} is not part of a simulation")
+        return self.sim_core
+
+    # A standalone object talks to PyBullet client 0; ``add_object`` re-reads the body from
+    # the simulation's own client, so a failed read here only affects standalone use.
+
+    def _standalone_mass(self) -> float:
+        try:
+            return float(p.getDynamicsInfo(self.body_id, -1)[0]) if self.body_id >= 0 else 0.0
+        except p.error:
+            return 0.0
+
+    def _standalone_pose(self) -> tuple[Sequence[float], Sequence[float]]:
+        try:
+            if self.body_id >= 0:
+                return p.getBasePositionAndOrientation(self.body_id)
+        except p.error:
+            pass
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+
+    def _refresh_log_prefix(self) -> None:
+        label = f"{self.object_id}:{self.name}" if self.name else str(self.object_id)
+        self._log.set_prefix(f"[{type(self).__name__}:{label}] ")

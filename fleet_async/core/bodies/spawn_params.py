@@ -1,0 +1,109 @@
+"""SimObjectSpawnParams: everything needed to create one SimObject."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+from fleet_async.core.base.config_utils import dataclass_from_dict
+from fleet_async.core.base.types import CollisionMode, coerce_enum
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.pose_config import pose_from_config
+from fleet_async.core.world.shapes import ShapeParams
+
+__all__ = ["SimObjectSpawnParams"]
+
+
+@dataclass
+class SimObjectSpawnParams:
+    """Parameters for spawning a SimObject.
+
+    Attributes:
+        visual_shape: Visual geometry, or None for an invisible body.
+        collision_shape: Collision geometry, or None for no collision shape.
+        initial_pose: Pose in the world frame (default: origin, identity).
+        mass: kg; 0.0 is kinematic (moved only by the simulator), > 0 is dynamic when physics is on.
+        pickable: Whether pick actions may pick this object.
+        name: Human-readable name; duplicates allowed (use ``object_id`` for identity).
+        visual_frame_pose: Visual shape offset in the body frame (overrides the shape's own).
+        collision_frame_pose: Collision shape offset in the body frame (overrides the shape's own).
+        collision_mode: How the object takes part in collision detection.
+        user_data: Free-form metadata.
+    """
+
+    visual_shape: ShapeParams | None = None
+    collision_shape: ShapeParams | None = None
+    initial_pose: Pose = field(default_factory=lambda: Pose([0.0, 0.0, 0.0]))
+    mass: float = 0.0
+    pickable: bool = True
+    name: str | None = None
+    visual_frame_pose: Pose | None = None
+    collision_frame_pose: Pose | None = None
+    collision_mode: CollisionMode = CollisionMode.NORMAL_3D
+    user_data: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        cls_name = type(self).__name__
+        for name in ("visual_shape", "collision_shape"):
+            value = getattr(self, name)
+            if isinstance(value, dict):
+                setattr(self, name, ShapeParams.from_dict(value))
+            elif value is not None and not isinstance(value, ShapeParams):
+                raise ValueError(
+                    f"{cls_name}.{name}: expected ShapeParams, a mapping or None, got {value!r}"
+                )
+        for name in ("initial_pose", "visual_frame_pose", "collision_frame_pose"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, Pose):
+                setattr(self, name, pose_from_config(value, field_name=f"{cls_name}.{name}"))
+        if self.initial_pose is None:
+            raise ValueError(f"{cls_name}.initial_pose: expected a Pose, got None")
+        mass = self.mass
+        if (
+            isinstance(mass, bool)
+            or not isinstance(mass, (int, float))
+            or not math.isfinite(mass)
+            or mass < 0
+        ):
+            raise ValueError(f"{cls_name}.mass: expected a finite number >= 0 (kg), got {mass!r}")
+        self.mass = float(mass)
+        self.collision_mode = coerce_enum(
+            CollisionMode, self.collision_mode, f"{cls_name}.collision_mode"
+        )
+        if self.name is not None and not isinstance(self.name, str):
+            raise ValueError(f"{cls_name}.name: expected a string or None, got {self.name!r}")
+        if not isinstance(self.user_data, dict):
+            raise ValueError(f"{cls_name}.user_data: expected a mapping, got {self.user_data!r}")
+
+    @classmethod
+    def from_dict(
+        cls, config: dict[str, Any], *, source: str | None = None
+    ) -> SimObjectSpawnParams:
+        """Build from a programmatic or YAML-style mapping.
+
+        Besides the field names, accepts ``pose: [x, y, z]`` with optional ``yaw`` (radians) as
+        an alternative to ``initial_pose``. Shape entries may be ShapeParams or mappings.
+
+        Raises:
+            ValueError: for an unknown key (with the nearest valid one) or a bad value.
+        """
+        if not isinstance(config, dict):
+            raise ValueError(f"{cls.__name__}.from_dict: expected a mapping, got {config!r}")
+        config = dict(config)
+        pose, yaw = config.pop("pose", None), config.pop("yaw", None)
+        if pose is not None or yaw is not None:
+            if "initial_pose" in config:
+                raise ValueError(f"{cls.__name__}: give either 'pose' or 'initial_pose', not both")
+            config["initial_pose"] = pose_from_config(
+                pose if pose is not None else [0.0, 0.0, 0.0], yaw, field_name="pose"
+            )
+        for name in ("visual_shape", "collision_shape"):
+            if isinstance(config.get(name), dict):
+                config[name] = ShapeParams.from_dict(config[name], source=source)
+        return dataclass_from_dict(cls, config, source=source, section=cls.__name__)
+
+    @classmethod
+    def field_names(cls) -> tuple[str, ...]:
+        """Names of the constructor fields (for config validation)."""
+        return tuple(f.name for f in fields(cls) if f.init)

@@ -1,0 +1,192 @@
+"""Creating the PyBullet bodies of spawn parameters: one at a time, or many at once.
+
+``create_body`` makes one multibody from a SimObjectSpawnParams. ``create_bodies`` makes many:
+PyBullet creates a whole group of identical bodies in one ``createMultiBody(batchPositions=)``
+call, about ten times faster per body than one call each at fleet sizes, so spawn parameters
+are grouped by their shapes and mass and each group is created in one call; ``wrap_all`` then
+wraps every body in its SimObject / Agent. Non-identity orientations are applied afterwards; URDF
+agents are loaded one by one (PyBullet has no batch form for them).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import defaultdict
+from collections.abc import Callable, Sequence
+from pathlib import Path as FsPath
+from typing import TYPE_CHECKING, TypeVar
+
+import pybullet as p
+
+from fleet_async.core.base.paths import resolve_data_file
+from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.world.shapes import get_or_create_shapes, record_body_shape
+
+if TYPE_CHECKING:
+    from fleet_async.core.base.types import CollisionMode
+    from fleet_async.core.bodies.sim_object import SimObject
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = ["create_bodies", "create_body", "load_sdf_objects", "wrap_all"]
+
+T = TypeVar("T", bound="SimObject")
+
+# PyBullet's batch creation is limited by its command buffer; chunks keep every call safe.
+_CHUNK = 4096
+_IDENTITY = [0.0, 0.0, 0.0, 1.0]
+
+
+def _shape_ids(params: SimObjectSpawnParams, sim: MultiRobotSimulationCore) -> tuple[int, int]:
+    visual, collision = params.visual_shape, params.collision_shape
+    if visual is not None and params.visual_frame_pose is not None:
+        visual = dataclasses.replace(visual, frame_pose=params.visual_frame_pose)
+    if collision is not None and params.collision_frame_pose is not None:
+        collision = dataclasses.replace(collision, frame_pose=params.collision_frame_pose)
+    return get_or_create_shapes(visual, collision, sim.client, list(sim.params.model_paths or []))
+
+
+def create_bodies(
+    params_list: Sequence[SimObjectSpawnParams], sim: MultiRobotSimulationCore
+) -> list[int]:
+    """Create one PyBullet body per entry (shape-based params only); return ids in input order.
+
+    Raises:
+        FileNotFoundError / ValueError: for bad shapes, before any body is created.
+    """
+    groups: dict[tuple[int, int, float], list[int]] = defaultdict(list)
+    for i, params in enumerate(params_list):
+        visual_id, collision_id = _shape_ids(params, sim)
+        groups[(visual_id, collision_id, params.mass)].append(i)
+    bodies = [-1] * len(params_list)
+    client = sim.client
+    try:
+        for (visual_id, collision_id, mass), members in groups.items():
+            for start in range(0, len(members), _CHUNK):
+                chunk = members[start : start + _CHUNK]
+                positions = [params_list[i].initial_pose.position.tolist() for i in chunk]
+                created = p.createMultiBody(
+                    baseMass=mass,
+                    baseCollisionShapeIndex=collision_id,
+                    baseVisualShapeIndex=visual_id,
+                    basePosition=positions[0],
+                    batchPositions=positions,
+                    physicsClientId=client,
+                )
+                ids = list(created) if isinstance(created, (list, tuple)) else [created]
+                if len(ids) != len(chunk) or min(ids) < 0:
+                    raise ValueError(
+                        f"PyBullet created {len(ids)} bodies for a batch of {len(chunk)}"
+                    )
+                for i, body, pos in zip(chunk, ids, positions, strict=True):
+                    bodies[i] = int(body)
+                    record_body_shape(client, int(body), collision_id)
+                    orn = params_list[i].initial_pose.orientation.tolist()
+                    if orn != _IDENTITY:
+                        p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=client)
+    except Exception:
+        for body in bodies:
+            if body >= 0:
+                p.removeBody(body, physicsClientId=client)
+        raise
+    return bodies
+
+
+def wrap_all(
+    bodies: Sequence[int],
+    make: Callable[[int, int], T],
+    sim: MultiRobotSimulationCore,
+) -> list[T]:
+    """Wrap each body with ``make(index, body)``; on failure remove what was built, re-raise."""
+    made: list[T] = []
+    try:
+        for i, body in enumerate(bodies):
+            made.append(make(i, body))
+    except Exception:
+        for obj in made:
+            sim.remove_object(obj)
+        for body in bodies[len(made) :]:
+            if body >= 0:
+                p.removeBody(body, physicsClientId=sim.client)
+        raise
+    return made
+
+
+def create_body(params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None) -> int:
+    """Create the PyBullet multibody for ``params`` and return its body id."""
+    client = 0 if sim_core is None else sim_core.client
+    if sim_core is None and not p.isConnected(physicsClientId=0):
+        raise RuntimeError(
+            "cannot create a body: no sim_core was given and no PyBullet client is connected; "
+            "pass sim_core=MultiRobotSimulationCore(...)"
+        )
+    search = [] if sim_core is None else list(sim_core.params.model_paths or [])
+    visual, collision = params.visual_shape, params.collision_shape
+    if visual is not None and params.visual_frame_pose is not None:
+        visual = dataclasses.replace(visual, frame_pose=params.visual_frame_pose)
+    if collision is not None and params.collision_frame_pose is not None:
+        collision = dataclasses.replace(collision, frame_pose=params.collision_frame_pose)
+    visual_id, collision_id = get_or_create_shapes(visual, collision, client, search)
+    pos, orn = params.initial_pose.as_position_orientation()
+    body = p.createMultiBody(
+        baseMass=params.mass,
+        baseCollisionShapeIndex=collision_id,
+        baseVisualShapeIndex=visual_id,
+        basePosition=pos,
+        baseOrientation=orn,
+        physicsClientId=client,
+    )
+    if body < 0:
+        raise ValueError(f"PyBullet could not create a body from {params!r}")
+    record_body_shape(client, int(body), collision_id)
+    return int(body)
+
+
+def load_sdf_objects(
+    cls: type[T],
+    sdf_path: str,
+    sim_core: MultiRobotSimulationCore | None,
+    collision_mode: CollisionMode | str,
+    global_scaling: float,
+    name_prefix: str | None,
+    pickable: bool,
+    use_fixed_base: bool,
+) -> list[T]:
+    """Load every body of an SDF file and wrap each in ``cls`` (``SimObject.from_sdf``).
+
+    If anything fails, nothing this call created is left behind.
+
+    Raises:
+        FileNotFoundError: naming the paths tried when the file does not exist.
+        ValueError: if PyBullet cannot parse the file.
+    """
+    search = [] if sim_core is None else list(sim_core.params.model_paths or [])
+    path = resolve_data_file(sdf_path, search, "sdf_path")
+    client = 0 if sim_core is None else sim_core.client
+    try:
+        bodies = p.loadSDF(path, globalScaling=float(global_scaling), physicsClientId=client)
+    except p.error as exc:
+        raise ValueError(f"sdf_path {path!r}: PyBullet could not load it ({exc})") from exc
+    prefix = name_prefix if name_prefix is not None else FsPath(path).stem
+    objects: list[T] = []
+    try:
+        for i, body in enumerate(bodies):
+            if use_fixed_base:
+                p.changeDynamics(body, -1, mass=0.0, physicsClientId=client)
+            objects.append(
+                cls(
+                    body,
+                    sim_core=sim_core,
+                    pickable=pickable,
+                    mass=0.0 if use_fixed_base else None,
+                    collision_mode=collision_mode,
+                    name=f"{prefix}_{i}" if len(bodies) > 1 else prefix,
+                )
+            )
+    except Exception:
+        for obj in objects:
+            if sim_core is not None:
+                sim_core.remove_object(obj)
+        for body in bodies[len(objects) :]:
+            p.removeBody(body, physicsClientId=client)
+        raise
+    return objects

@@ -1,0 +1,42 @@
+"""The mission seam: what the core offers to the async mission layer (``fleet_async.tasks``).
+
+``fleet_async.tasks`` imports the core only from here (a test keeps it so). The seam is:
+
+- ``MissionRuntime``: what a mission runtime must provide; ``fleet_async.run`` installs one
+  with ``sim.set_mission_runtime``;
+- ``SimMissionApi`` / ``SimEventBus`` (``mission_api.py``): the sim-time awaitables of the
+  simulation (``sim.sleep``, ``sim.move_on_after``, ``sim.events.wait``, ...), which delegate
+  to the installed runtime;
+- ``AgentMissionApi`` (``agent_missions.py``): ``await agent.move(...)`` and the other agent
+  commands, each queueing an Action and returning the runtime's event for it;
+- what the runtime reads back: ``SimEvents``, ``ActionStatus``, ``Action``, ``MoveAction``,
+  ``WaitAction``, and (for annotations only) ``MultiRobotSimulationCore``.
+
+May import ``actions`` and below at run time.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from fleet_async.core.actions.action import Action, MoveAction, WaitAction
+from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.types import ActionStatus
+from fleet_async.core.missions.agent_missions import AgentMissionApi
+from fleet_async.core.missions.mission_api import MissionRuntime, SimEventBus, SimMissionApi
+
+if TYPE_CHECKING:
+    # The simulation class stands above this layer: for annotations only.
+    from fleet_async.core.simulation import MultiRobotSimulationCore as MultiRobotSimulationCore
+
+__all__ = [
+    "Action",
+    "ActionStatus",
+    "AgentMissionApi",
+    "MissionRuntime",
+    "MoveAction",
+    "SimEventBus",
+    "SimEvents",
+    "SimMissionApi",
+    "WaitAction",
+]

@@ -1,0 +1,90 @@
+"""Agent commands for async missions: each queues the matching Action and returns its event.
+
+``agent.move(path)`` queues a MoveAction at once and returns an event for it (the runtime's
+``ActionWait``): ``await`` it to wait for the end; it returns the finished action, raises
+ActionFailedError (with ``.action`` and its ``error_message``) when it FAILED, and
+ActionCancelledError when something outside the mission cancelled it. The event is also a
+handle (``cancel()``, ``status``, ``phase``, ``progress``) and composes with ``sim.any_of``.
+Cancelling a mission that awaits it (a task group, a sim-time timeout, a race it lost, an
+interrupt) cancels the action: a queued one is dropped, a running one stops the robot in that
+step.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from fleet_async.core.actions.action import Action, MoveAction, WaitAction
+from fleet_async.core.actions.arm_actions import JointAction, PoseAction
+from fleet_async.core.actions.pick_drop import DropAction, PickAction
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.waypoints import Path
+
+if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.missions.mission_api import MissionRuntime
+
+__all__ = ["AgentMissionApi"]
+
+
+class AgentMissionApi:
+    """Mixin for Agent: ``await agent.move(...)``, ``pick``, ``drop``, ``wait``, ``charge``,
+    ``move_joints``, ``reach_pose``, ``submit``. Each queues its action when called and
+    returns an event for it."""
+
+    def _mission_runtime(self, what: str) -> MissionRuntime:
+        sim = getattr(self, "sim_core", None)
+        runtime = None if sim is None else sim.mission_runtime
+        if runtime is None:
+            raise RuntimeError(
+                f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
+            )
+        return runtime
+
+    def submit(self, action: Action) -> Any:
+        """Queue ``action`` now and return its event: ``await`` it to wait for the end,
+        ``cancel()`` it, or watch ``status``, ``phase`` and ``progress``."""
+        runtime = self._mission_runtime("agent.submit")
+        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        agent.add_action(action)
+        return runtime.wait_action(agent, action)
+
+    def move(self, path: Path | Pose | list[Pose], **options: Any) -> Any:
+        """Follow ``path``; options as MoveAction (auto_approach, direction, ...)."""
+        if not isinstance(path, (Path, Pose)):
+            path = Path(list(path))
+        action = MoveAction(path=path, **options)  # type: ignore[arg-type]  # takes a Pose too
+        return self.submit(action)
+
+    def pick(self, target: Any = None, **options: Any) -> Any:
+        """Pick ``target`` (a SimObject or body id), or pass PickAction options such as
+        ``target_position`` and ``search_radius``."""
+        if target is not None:
+            options["target_object_id"] = target
+        return self.submit(PickAction(**options))
+
+    def drop(self, drop_pose: Pose, **options: Any) -> Any:
+        """Drop what is carried at ``drop_pose`` (DropAction options)."""
+        return self.submit(DropAction(drop_pose=drop_pose, **options))
+
+    def wait(self, duration: float, action_type: str = "idle") -> Any:
+        """Stand still for ``duration`` sim seconds as a queued WaitAction."""
+        return self.submit(WaitAction(duration=duration, action_type=action_type))
+
+    def charge(self, duration: float) -> Any:
+        """Charge the battery for ``duration`` sim seconds."""
+        return self.wait(duration, action_type="charge")
+
+    def move_joints(self, targets: Any, **options: Any) -> Any:
+        """Move joints to ``targets`` (a list, or {joint name: position}) as a JointAction;
+        options: ``max_force``, ``tolerance``."""
+        return self.submit(JointAction(target_joint_positions=targets, **options))
+
+    def reach_pose(self, position: Any, orientation: Any = None, **options: Any) -> Any:
+        """Bring the end effector to ``position`` ([x, y, z], world frame) and optionally
+        ``orientation`` ([qx, qy, qz, qw]) through IK, as a PoseAction (raises
+        ActionFailedError when it is out of reach); options: ``end_effector_link``,
+        ``max_force``, ``tolerance``."""
+        return self.submit(
+            PoseAction(target_position=position, target_orientation=orientation, **options)
+        )

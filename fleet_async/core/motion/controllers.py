@@ -1,0 +1,484 @@
+"""Movement controllers: parameters, the built-in kinds, and building a chain from config.
+
+An agent has a *chain* of controllers. Index 0 is the *base* controller, a
+:class:`KinematicController` that turns goals and paths into motion: :class:`OmniController`
+or :class:`DifferentialController`. Built-in base controllers do not run per agent: the
+simulation's kinematic engine advances every agent on them in one numpy pass. Entries after the
+base are *high-level* controllers (:class:`PatrolController`, :class:`RandomWalkController`,
+or a user's :class:`Controller` subclass) whose ``compute(agent, dt)`` runs every step and
+steers the agent through its public API (``set_path``, ``set_goal_pose``...).
+
+A user's KinematicController subclass that overrides ``compute`` replaces the engine for its
+agent and runs per agent; one that only changes parameters stays vectorised.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from fleet_async.core.base.config_utils import resolve_class
+from fleet_async.core.base.types import MotionMode, MovementDirection, coerce_enum
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.pose_config import pose_from_config
+from fleet_async.core.motion.kinematics import KIND_DIFFERENTIAL, KIND_OMNI, KinematicEngine
+from fleet_async.core.motion.segments import MotionLimits
+
+if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
+
+__all__ = [
+    "CONTROLLER_REGISTRY",
+    "Controller",
+    "ControllerParams",
+    "DifferentialController",
+    "KinematicController",
+    "OmniController",
+    "PatrolController",
+    "RandomWalkController",
+    "build_controller_chain",
+    "create_controller",
+    "register_controller",
+]
+
+logger = logging.getLogger(__name__)
+
+
+def _limit(value: Any, name: str) -> float | tuple[float, float, float]:
+    """Validate a scalar or per-axis (3) positive limit."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not (math.isfinite(value) or value == math.inf) or value <= 0:
+            raise ValueError(f"ControllerParams.{name}: expected a number > 0, got {value!r}")
+        return float(value)
+    try:
+        items = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"ControllerParams.{name}: expected a number or [x, y, z], got {value!r}"
+        ) from None
+    if len(items) != 3 or not all(v > 0 for v in items):
+        raise ValueError(
+            f"ControllerParams.{name}: expected 3 numbers > 0 (x, y, z), got {value!r}"
+        )
+    return (items[0], items[1], items[2])
+
+
+@dataclass
+class ControllerParams:
+    """Kinematic limits and defaults shared by the built-in controllers.
+
+    Each limit is a scalar (a bound on the Euclidean magnitude) or per-axis ``[x, y, z]``
+    (linear: world axes; angular: roll, pitch, yaw rates).
+
+    Attributes:
+        max_linear_vel: m/s.
+        max_linear_accel: m/s^2.
+        max_angular_vel: rad/s.
+        max_angular_accel: rad/s^2.
+        default_direction: Differential travel direction when ``set_path`` gets none.
+    """
+
+    max_linear_vel: float | tuple[float, float, float] = 2.0
+    max_linear_accel: float | tuple[float, float, float] = 5.0
+    max_angular_vel: float | tuple[float, float, float] = 3.0
+    max_angular_accel: float | tuple[float, float, float] = 10.0
+    default_direction: MovementDirection = MovementDirection.FORWARD
+
+    def __post_init__(self) -> None:
+        for name in ("max_linear_vel", "max_linear_accel", "max_angular_vel", "max_angular_accel"):
+            setattr(self, name, _limit(getattr(self, name), name))
+        self.default_direction = coerce_enum(
+            MovementDirection, self.default_direction, "ControllerParams.default_direction"
+        )
+
+    def limits(self) -> MotionLimits:
+        """The limits as the kinematic engine takes them."""
+        return MotionLimits(
+            self.max_linear_vel, self.max_linear_accel, self.max_angular_vel, self.max_angular_accel
+        )
+
+    @classmethod
+    def field_names(cls) -> tuple[str, ...]:
+        """Names of the fields (to split a config dict into params and extras)."""
+        return tuple(f.name for f in fields(cls))
+
+
+class Controller:
+    """Base class of every controller.
+
+    Subclass it for high-level behaviour and override :meth:`compute`, which the simulation
+    calls once per step with the agent this controller is installed on.
+    """
+
+    def __init__(self, params: ControllerParams | None = None) -> None:
+        self.params = params if params is not None else ControllerParams()
+
+    def on_install(self, agent: Agent) -> None:
+        """Called when the controller joins ``agent``'s chain."""
+
+    def on_remove(self, agent: Agent) -> None:
+        """Called when the controller leaves ``agent``'s chain."""
+
+    def compute(self, agent: Agent, dt: float) -> None:
+        """Advance this controller for one step of ``dt`` seconds."""
+
+    @property
+    def is_base(self) -> bool:
+        """Whether this controller moves the agent (index 0 of the chain)."""
+        return isinstance(self, KinematicController)
+
+
+class KinematicController(Controller):
+    """A base controller; built-in subclasses are advanced by the vectorised engine.
+
+    Args:
+        params: Limits; keyword overrides (``max_linear_vel=...``) are applied on top.
+    """
+
+    kind: ClassVar[int] = KIND_OMNI
+    motion_mode: ClassVar[MotionMode] = MotionMode.OMNIDIRECTIONAL
+
+    def __init__(self, params: ControllerParams | None = None, **overrides: Any) -> None:
+        base = params if params is not None else ControllerParams()
+        if overrides:
+            unknown = sorted(set(overrides) - set(ControllerParams.field_names()))
+            if unknown:
+                raise ValueError(
+                    f"{type(self).__name__}: unknown parameter(s) {unknown}; "
+                    f"valid: {list(ControllerParams.field_names())}"
+                )
+            base = ControllerParams(**{**_params_dict(base), **overrides})
+        super().__init__(base)
+
+    @property
+    def vectorized(self) -> bool:
+        """Whether the engine advances this controller (True unless ``compute`` is overridden)."""
+        return type(self).compute is KinematicController.compute
+
+    # The motion interface an Agent delegates to. The built-in versions drive the agent's
+    # slot in the simulation's kinematic engine; a custom base controller that overrides
+    # ``compute`` overrides these too and calls ``agent.report_motion_end`` when it stops.
+
+    def set_path(
+        self,
+        agent: Agent,
+        waypoints: list[Pose],
+        direction: MovementDirection,
+        final_orientation_align: bool,
+    ) -> None:
+        """Start following ``waypoints``."""
+        _engine(agent).set_path(agent.motion_slot, waypoints, direction, final_orientation_align)
+
+    def set_velocity(self, agent: Agent, command: tuple[float, float, float, float]) -> None:
+        """Follow a body-frame (vx, vy, vz, wz) command."""
+        _engine(agent).set_velocity(agent.motion_slot, command)
+
+    def stop(self, agent: Agent) -> None:
+        """Stop at once."""
+        _engine(agent).stop(agent.motion_slot)
+
+    def is_moving(self, agent: Agent) -> bool:
+        """Whether the agent is moving under this controller."""
+        return _engine(agent).is_moving(agent.motion_slot)
+
+    def goal_pose(self, agent: Agent) -> Pose | None:
+        """Final pose of the current path, or None."""
+        return _engine(agent).goal(agent.motion_slot)
+
+    def remaining_path(self, agent: Agent) -> list[Pose]:
+        """Waypoints not reached yet."""
+        return _engine(agent).remaining_waypoints(agent.motion_slot)
+
+    def waypoint_index(self, agent: Agent) -> int:
+        """Index of the waypoint being approached."""
+        return _engine(agent).waypoint_index(agent.motion_slot)
+
+
+def _engine(agent: Agent) -> KinematicEngine:
+    assert agent.sim_core is not None
+    assert agent.motion_slot >= 0
+    return agent.sim_core.fleet.engine
+
+
+class OmniController(KinematicController):
+    """Holonomic base: translates straight to each waypoint while turning to its orientation."""
+
+    kind = KIND_OMNI
+    motion_mode = MotionMode.OMNIDIRECTIONAL
+
+
+class DifferentialController(KinematicController):
+    """Differential base: turns to face each waypoint, then drives straight to it.
+
+    Args:
+        params: Limits.
+        wheel_separation: Track width in metres (informational; kinematics are unicycle).
+        **overrides: ControllerParams fields.
+    """
+
+    kind = KIND_DIFFERENTIAL
+    motion_mode = MotionMode.DIFFERENTIAL
+
+    def __init__(
+        self,
+        params: ControllerParams | None = None,
+        wheel_separation: float = 0.3,
+        **overrides: Any,
+    ):
+        super().__init__(params, **overrides)
+        if not wheel_separation > 0:
+            raise ValueError(
+                f"DifferentialController.wheel_separation: expected > 0, got {wheel_separation!r}"
+            )
+        self.wheel_separation = float(wheel_separation)
+
+
+def _params_dict(params: ControllerParams) -> dict[str, Any]:
+    return {name: getattr(params, name) for name in ControllerParams.field_names()}
+
+
+class PatrolController(Controller):
+    """Visit waypoints in order, pausing ``wait`` seconds at each; repeat if ``loop``.
+
+    Args:
+        waypoints: Poses or [x, y, z] positions to visit.
+        wait: Sim seconds to pause at each waypoint.
+        loop: Start over after the last waypoint.
+    """
+
+    def __init__(
+        self,
+        waypoints: Sequence[Any],
+        wait: float = 0.0,
+        loop: bool = True,
+        params: ControllerParams | None = None,
+    ):
+        super().__init__(params)
+        if not waypoints:
+            raise ValueError("PatrolController.waypoints: expected at least one waypoint, got []")
+        self.waypoints: list[Pose] = [
+            pose_from_config(w, field_name=f"PatrolController.waypoints[{i}]")
+            for i, w in enumerate(waypoints)
+        ]
+        if not (isinstance(wait, (int, float)) and wait >= 0):
+            raise ValueError(f"PatrolController.wait: expected a number >= 0 (s), got {wait!r}")
+        self.wait = float(wait)
+        self.loop = bool(loop)
+        self.index = 0
+        self.finished = False
+        self._waiting_until: float | None = None
+        self._sent = False
+
+    def compute(self, agent: Agent, dt: float) -> None:
+        """Send the next waypoint once the agent has arrived and waited."""
+        if self.finished or agent.is_moving or agent.get_current_action() is not None:
+            return
+        now = agent.sim_core.sim_time if agent.sim_core is not None else 0.0
+        if self._sent:  # just arrived at waypoints[index]
+            self._sent = False
+            self.index += 1
+            if self.index >= len(self.waypoints):
+                if not self.loop:
+                    self.finished = True
+                    return
+                self.index = 0
+            self._waiting_until = now + self.wait
+        if self._waiting_until is not None and now + 1e-9 < self._waiting_until:
+            return
+        self._waiting_until = None
+        agent.set_path([self.waypoints[self.index]])
+        self._sent = True
+
+
+class RandomWalkController(Controller):
+    """Wander to random points within ``radius`` of ``center``, pausing between moves.
+
+    The random stream is derived from the simulation seed and the agent's object id, so a walk
+    is the same run after run whatever else is spawned around it.
+
+    Args:
+        radius: Metres around the center.
+        wait_range: (min, max) sim seconds to pause after each move.
+        center: [x, y, z]; defaults to the agent's pose when installed.
+    """
+
+    def __init__(
+        self,
+        radius: float = 5.0,
+        wait_range: Sequence[float] = (0.0, 2.0),
+        center: Sequence[float] | None = None,
+        params: ControllerParams | None = None,
+    ):
+        super().__init__(params)
+        if not (isinstance(radius, (int, float)) and radius > 0):
+            raise ValueError(
+                f"RandomWalkController.radius: expected a number > 0 (m), got {radius!r}"
+            )
+        lo, hi = (float(v) for v in wait_range)
+        if not 0 <= lo <= hi:
+            raise ValueError(
+                f"RandomWalkController.wait_range: expected 0 <= min <= max, got {wait_range!r}"
+            )
+        self.radius = float(radius)
+        self.wait_range = (lo, hi)
+        self.center = None if center is None else np.asarray(center, dtype=float)
+        self._rng: np.random.Generator | None = None
+        self._waiting_until: float | None = None
+        self._moved = False
+
+    def on_install(self, agent: Agent) -> None:
+        """Seed the stream and fix the center."""
+        seed = 0 if agent.sim_core is None else agent.sim_core.params.seed
+        self._rng = np.random.default_rng([seed, max(agent.object_id, 0), 0x5A17])
+        if self.center is None:
+            self.center = agent.get_pose().position.copy()
+
+    def compute(self, agent: Agent, dt: float) -> None:
+        """Pick a new point once the agent has stopped and waited."""
+        if agent.is_moving or agent.get_current_action() is not None or self._rng is None:
+            return
+        now = agent.sim_core.sim_time if agent.sim_core is not None else 0.0
+        if self._moved:
+            self._moved = False
+            self._waiting_until = now + float(self._rng.uniform(*self.wait_range))
+        if self._waiting_until is not None and now + 1e-9 < self._waiting_until:
+            return
+        self._waiting_until = None
+        assert self.center is not None
+        angle = self._rng.uniform(0.0, 2.0 * math.pi)
+        dist = self.radius * math.sqrt(self._rng.uniform())
+        target = self.center + np.array([dist * math.cos(angle), dist * math.sin(angle), 0.0])
+        target[2] = agent.get_pose().z
+        agent.set_goal_pose(Pose(target))
+        self._moved = True
+
+
+CONTROLLER_REGISTRY: dict[str, type[Controller]] = {
+    "omni": OmniController,
+    "omnidirectional": OmniController,
+    "differential": DifferentialController,
+    "patrol": PatrolController,
+    "random_walk": RandomWalkController,
+}
+
+
+def register_controller(name: str, cls: type[Controller]) -> None:
+    """Make ``cls`` available as ``controller: {type: name}``.
+
+    ``create_controller`` calls ``cls(params=ControllerParams(...), **other_keys)``, so the
+    class must accept a ``params`` keyword.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Controller)):
+        raise TypeError(f"register_controller: {cls!r} is not a Controller subclass")
+    CONTROLLER_REGISTRY[name] = cls
+
+
+def _controller_class(spec: dict[str, Any], where: str) -> type[Controller]:
+    if "type" in spec and "class" in spec:
+        raise ValueError(f"{where}: give either 'type' or 'class', not both")
+    if "type" not in spec and "class" not in spec:
+        raise ValueError(
+            f"{where}: a controller mapping needs 'type' (one of {sorted(CONTROLLER_REGISTRY)}) "
+            f"or 'class' (a dotted path), got {spec!r}"
+        )
+    if "class" in spec:
+        cls = resolve_class(str(spec["class"]))
+        if not (isinstance(cls, type) and issubclass(cls, Controller)):
+            raise ValueError(f"{where}.class: {spec['class']!r} is not a Controller subclass")
+        return cls
+    name = spec["type"]
+    if name not in CONTROLLER_REGISTRY:
+        raise ValueError(
+            f"{where}.type: unknown controller {name!r}; known: {sorted(CONTROLLER_REGISTRY)}"
+        )
+    return CONTROLLER_REGISTRY[name]
+
+
+def create_controller(
+    spec: str | dict[str, Any], config: dict[str, Any] | None = None, *, where: str = "controller"
+) -> Controller:
+    """Build one controller from a registry name or a ``{type|class: ..., **params}`` mapping.
+
+    ControllerParams fields in the mapping become the controller's params; the rest go to its
+    constructor. Unknown keys are a ValueError naming them and the controller.
+    """
+    entry: dict[str, Any] = {"type": spec} if isinstance(spec, str) else dict(spec)
+    entry.update(config or {})
+    cls = _controller_class(entry, where)
+    kwargs = {k: v for k, v in entry.items() if k not in ("type", "class")}
+    param_keys = set(ControllerParams.field_names())
+    params_kw = {k: kwargs.pop(k) for k in list(kwargs) if k in param_keys}
+    try:
+        params = ControllerParams(**params_kw)
+        return cls(params=params, **kwargs)
+    except TypeError as exc:
+        raise ValueError(f"{where}: bad parameters for {cls.__name__}: {exc}") from None
+
+
+def build_controller_chain(
+    spec: Any, motion_mode: MotionMode, defaults: dict[str, Any] | None = None
+) -> list[Controller]:
+    """Turn an Agent's ``controller`` argument into a chain (base first).
+
+    Args:
+        spec: None, a registry name, a mapping, a list of mappings, a ControllerParams or a
+            Controller (see ``Agent``).
+        motion_mode: Picks the base class when ``spec`` names none.
+        defaults: Fleet-wide ControllerParams fields applied under the agent's own.
+    """
+    base_cls: type[KinematicController] = (
+        DifferentialController if motion_mode is MotionMode.DIFFERENTIAL else OmniController
+    )
+    defaults = dict(defaults or {})
+    if spec is None:
+        return [base_cls(ControllerParams(**defaults))]
+    if isinstance(spec, ControllerParams):
+        return [base_cls(ControllerParams(**{**defaults, **_params_dict(spec)}))]
+    if isinstance(spec, Controller):
+        return [spec] if spec.is_base else [base_cls(ControllerParams(**defaults)), spec]
+    entries = spec if isinstance(spec, list) else [spec]
+    chain: list[Controller] = []
+    base: Controller | None = None
+    for i, entry in enumerate(entries):
+        where = f"controller[{i}]" if isinstance(spec, list) else "controller"
+        if isinstance(entry, dict) and "type" not in entry and "class" not in entry:
+            entry = {"type": base_cls.motion_mode.value, **entry}  # params only: default base
+        if isinstance(entry, dict):
+            entry = {**defaults, **entry} if _is_base_entry(entry, where) else entry
+        ctrl = create_controller(entry, where=where) if isinstance(entry, (str, dict)) else entry
+        if not isinstance(ctrl, Controller):
+            raise ValueError(f"{where}: expected a name, mapping or Controller, got {entry!r}")
+        if ctrl.is_base:
+            if base is not None:
+                raise ValueError(
+                    f"{where}: a second base controller ({type(ctrl).__name__}); a chain has one "
+                    f"base (already {type(base).__name__}) plus high-level controllers"
+                )
+            # motion_mode defaults to DIFFERENTIAL, so only an explicit OMNIDIRECTIONAL that a
+            # differential controller contradicts is worth a warning.
+            if (
+                isinstance(ctrl, KinematicController)
+                and motion_mode is MotionMode.OMNIDIRECTIONAL
+                and ctrl.motion_mode is not motion_mode
+            ):
+                logger.warning(
+                    "%s: controller type %s overrides motion_mode=%s",
+                    where,
+                    type(ctrl).__name__,
+                    motion_mode.value,
+                )
+            base = ctrl
+        else:
+            chain.append(ctrl)
+    if base is None:
+        base = base_cls(ControllerParams(**defaults))
+    return [base, *chain]
+
+
+def _is_base_entry(entry: dict[str, Any], where: str) -> bool:
+    return issubclass(_controller_class(entry, where), KinematicController)

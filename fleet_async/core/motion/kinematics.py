@@ -1,0 +1,478 @@
+"""Vectorised kinematic motion for every agent on a built-in (omni / differential) controller.
+
+Each agent on a built-in controller owns one *slot* of this engine. A slot follows its path one
+*segment* at a time; a segment moves the body from a start pose to a target pose along a
+straight line while slerping its orientation, both driven by one normalised progress
+``u`` in [0, 1] with a trapezoidal rate profile. The profile's limits are chosen per segment so
+that neither the linear (m/s, m/s^2) nor the angular (rad/s, rad/s^2) limits are exceeded:
+
+    du/dt    <= min(v_max_along / L, w_max_about / theta)
+    d2u/dt2  <= min(a_max_along / L, alpha_max_about / theta)
+
+A differential robot's path becomes ROTATE segments (L = 0, turn to face the next waypoint) and
+FORWARD segments (theta = 0, drive straight). An omnidirectional robot translates and rotates
+at once. Every segment starts and ends at rest and ends exactly on its target.
+
+``advance(dt)`` integrates all moving slots with numpy in one pass. Python runs only when a
+segment ends (to plan the next one), never per robot per step.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fleet_async.core.base.types import MovementDirection
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.quaternions import quat_from_euler, quat_slerp_batch, yaw_from_quats
+from fleet_async.core.motion.segments import (
+    EPS_ANGLE,
+    EPS_LEN,
+    MotionLimits,
+    axis_cap,
+    braking_rate,
+    heading_toward,
+)
+from fleet_async.core.world.state import KinematicState
+
+__all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine"]
+
+KIND_OMNI = 0
+KIND_DIFFERENTIAL = 1
+_IDLE, _VELOCITY, _POSE = 0, 1, 2
+_NONE, _TURNED, _DRIVING = 0, 1, 2  # progress toward the plan's next waypoint
+
+
+@dataclass
+class _Plan:
+    waypoints: deque[Pose]
+    direction: MovementDirection
+    final_align: bool
+    final_orientation: np.ndarray
+    total: int
+    stage: int = _NONE
+    aligned: bool = False
+
+
+class KinematicEngine:
+    """Moves every slot's row of the state store by its path or velocity command.
+
+    Args:
+        store: The simulation's state store.
+        on_motion_end: Called ``(slot, reached)`` when a slot stops: ``reached`` is True when it
+            finished its path, False when stopped or replaced.
+    """
+
+    # Per-slot columns, grown together by _alloc (see there for shapes).
+    row: np.ndarray
+    kind: np.ndarray
+    mode: np.ndarray
+    vmax: np.ndarray
+    amax: np.ndarray
+    wmax: np.ndarray
+    alpha: np.ndarray
+    p0: np.ndarray
+    p1: np.ndarray
+    axis: np.ndarray
+    q0: np.ndarray
+    q1: np.ndarray
+    q_goal: np.ndarray
+    u: np.ndarray
+    du: np.ndarray
+    u_vmax: np.ndarray
+    u_amax: np.ndarray
+    theta: np.ndarray
+    sl_dot: np.ndarray
+    sl_theta: np.ndarray
+    sl_sin: np.ndarray
+    carry: np.ndarray
+    lin_scalar: np.ndarray
+    ang_scalar: np.ndarray
+    cmd: np.ndarray
+    vel: np.ndarray
+
+    def __init__(self, store: KinematicState, on_motion_end: Callable[[int, bool], None]) -> None:
+        self._store = store
+        self._on_motion_end = on_motion_end
+        self._free: list[int] = []
+        self._high = 0
+        self._stopped: list[int] = []  # slots that arrived last step: zero their velocity next
+        self._plans: list[_Plan | None] = []
+        self._alloc(16)
+
+    # ----- slots --------------------------------------------------------------------------
+
+    def _alloc(self, cap: int) -> None:
+        def grow(name: str, shape: tuple[int, ...], dtype: type, fill: float) -> None:
+            new: np.ndarray = np.full((cap, *shape), fill, dtype=dtype)
+            old = getattr(self, name, None)
+            if old is not None:
+                new[: len(old)] = old
+            setattr(self, name, new)
+
+        grow("row", (), np.int64, -1)
+        grow("kind", (), np.int8, 0)
+        grow("mode", (), np.int8, _IDLE)
+        for name in ("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"):
+            grow(name, (3,), np.float64, 0.0)
+        for name in ("q0", "q1", "q_goal"):
+            grow(name, (4,), np.float64, 0.0)
+        for name in (
+            "u",
+            "du",
+            "u_vmax",
+            "u_amax",
+            "theta",
+            "sl_dot",
+            "sl_theta",
+            "sl_sin",
+            "carry",
+        ):
+            grow(name, (), np.float64, 0.0)
+        grow("lin_scalar", (), np.bool_, True)
+        grow("ang_scalar", (), np.bool_, True)
+        grow("cmd", (4,), np.float64, 0.0)  # body-frame vx, vy, vz, wz
+        grow("vel", (4,), np.float64, 0.0)  # current body-frame velocity in VELOCITY mode
+        self._plans.extend([None] * (cap - len(self._plans)))
+
+    def add(self, row: int, kind: int, limits: MotionLimits) -> int:
+        """Give a store row a slot; return the slot index."""
+        if self._free:
+            slot = heapq.heappop(self._free)
+        else:
+            slot = self._high
+            self._high += 1
+            if slot >= len(self.row):
+                self._alloc(2 * len(self.row))
+        self.row[slot] = row
+        self.kind[slot] = kind
+        self.mode[slot] = _IDLE
+        self.set_limits(slot, limits)
+        self._plans[slot] = None
+        return slot
+
+    def remove(self, slot: int) -> None:
+        """Free a slot (no motion-end callback)."""
+        self.mode[slot] = _IDLE
+        self.row[slot] = -1
+        self._plans[slot] = None
+        heapq.heappush(self._free, slot)
+
+    def set_limits(self, slot: int, limits: MotionLimits) -> None:
+        """Replace a slot's kinematic limits (applies from the next segment)."""
+        # Called once per spawned agent: plain assignments, no temporary arrays.
+        self.vmax[slot] = limits.max_linear_vel
+        self.amax[slot] = limits.max_linear_accel
+        self.wmax[slot] = limits.max_angular_vel
+        self.alpha[slot] = limits.max_angular_accel
+        self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
+        self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
+
+    # ----- queries ------------------------------------------------------------------------
+
+    def is_moving(self, slot: int) -> bool:
+        """Whether the slot follows a path or a non-zero velocity command."""
+        mode = self.mode[slot]
+        if mode == _POSE:
+            return True
+        return bool(mode == _VELOCITY and (self.vel[slot].any() or self.cmd[slot].any()))
+
+    def remaining_waypoints(self, slot: int) -> list[Pose]:
+        """Waypoints not reached yet (the current target first)."""
+        plan = self._plans[slot]
+        return [] if plan is None else list(plan.waypoints)
+
+    def waypoint_index(self, slot: int) -> int:
+        """Index of the waypoint being approached in the path given to ``set_path``."""
+        plan = self._plans[slot]
+        if plan is None:
+            return 0
+        return min(plan.total - len(plan.waypoints), max(plan.total - 1, 0))
+
+    def goal(self, slot: int) -> Pose | None:
+        """The final pose of the current path, or None when idle."""
+        plan = self._plans[slot]
+        if plan is None:
+            return None
+        return Pose.from_arrays_unchecked(
+            self._plan_goal_position(slot, plan), plan.final_orientation.copy()
+        )
+
+    def _plan_goal_position(self, slot: int, plan: _Plan) -> np.ndarray:
+        if plan.waypoints:
+            return plan.waypoints[-1].position.copy()
+        return self.p1[slot].copy()
+
+    # ----- commands -----------------------------------------------------------------------
+
+    def set_path(
+        self,
+        slot: int,
+        waypoints: Sequence[Pose],
+        direction: MovementDirection,
+        final_orientation_align: bool,
+    ) -> None:
+        """Follow ``waypoints`` from the current pose (replacing any motion in progress)."""
+        self._interrupt(slot)
+        wps = deque(waypoints)
+        if not wps:
+            self._finish(slot, reached=True)
+            return
+        self._plans[slot] = _Plan(
+            waypoints=wps,
+            direction=direction,
+            final_align=final_orientation_align,
+            final_orientation=wps[-1].orientation.copy(),
+            total=len(wps),
+        )
+        self.mode[slot] = _POSE
+        self._plan_next(slot)
+
+    def set_velocity(self, slot: int, command: Sequence[float]) -> None:
+        """Follow a body-frame velocity command (vx, vy, vz in m/s, wz in rad/s)."""
+        if self.mode[slot] == _POSE:
+            self._interrupt(slot)
+        if self.mode[slot] != _VELOCITY:
+            # Start from the current motion so the command ramps within the accel limits.
+            row = self.row[slot]
+            yaw = float(yaw_from_quats(self._store.orientation[row][None, :])[0])
+            vx, vy, vz = self._store.velocity[row]
+            cos, sin = math.cos(yaw), math.sin(yaw)
+            self.vel[slot] = (
+                cos * vx + sin * vy,
+                -sin * vx + cos * vy,
+                vz,
+                self._store.angular_velocity[row][2],
+            )
+        self.cmd[slot] = command
+        self.mode[slot] = _VELOCITY
+
+    def stop(self, slot: int) -> None:
+        """Stop at once: no path, no command, zero velocity."""
+        self._interrupt(slot)
+        self.mode[slot] = _IDLE
+        self.cmd[slot] = 0.0
+        self.vel[slot] = 0.0
+        row = self.row[slot]
+        self._store.velocity[row] = 0.0
+        self._store.angular_velocity[row] = 0.0
+
+    def _interrupt(self, slot: int) -> None:
+        """End a path in progress without reaching it (motion-end callback, reached=False)."""
+        if self._plans[slot] is not None or self.mode[slot] == _POSE:
+            self._plans[slot] = None
+            self.mode[slot] = _IDLE
+            self.du[slot] = 0.0
+            self._on_motion_end(slot, False)
+
+    # ----- planning (Python, once per segment) ---------------------------------------------
+
+    def _plan_next(self, slot: int) -> None:
+        """Start the slot's next segment, or finish its path."""
+        plan = self._plans[slot]
+        assert plan is not None
+        row = self.row[slot]
+        differential = self.kind[slot] == KIND_DIFFERENTIAL
+        while True:
+            if plan.stage == _DRIVING:  # the segment to waypoints[0] has just ended
+                plan.waypoints.popleft()
+                plan.stage = _NONE
+            pos = self._store.position[row]
+            orn = self._store.orientation[row]
+            if plan.waypoints:
+                target = plan.waypoints[0]
+                if differential and plan.stage == _NONE:
+                    plan.stage = _TURNED
+                    heading = heading_toward(plan.direction, pos, orn, target.position)
+                    if heading is not None and self._start(slot, pos, heading):
+                        return
+                    continue
+                plan.stage = _DRIVING
+                keep = differential or not plan.final_align
+                if self._start(slot, target.position, orn if keep else target.orientation):
+                    return
+                continue
+            if plan.final_align and not plan.aligned:
+                plan.aligned = True
+                final = plan.final_orientation
+                if differential:  # a ground robot aligns its heading only
+                    final = quat_from_euler(0.0, 0.0, float(yaw_from_quats(final[None, :])[0]))
+                if self._start(slot, pos, final):
+                    return
+                continue
+            self._finish(slot, reached=True)
+            return
+
+    def _start(self, slot: int, target_pos: np.ndarray, target_orn: np.ndarray) -> bool:
+        """Begin a segment to (target_pos, target_orn); False if there is nothing to do.
+
+        Runs once per segment for one slot, so it works on Python floats: small numpy calls
+        would cost more than the arithmetic.
+        """
+        row = self.row[slot]
+        px, py, pz = self._store.position[row].tolist()
+        ax, ay, az, aw = self._store.orientation[row].tolist()
+        tx, ty, tz = (float(v) for v in target_pos)
+        bx, by, bz, bw = (float(v) for v in target_orn)
+        dx, dy, dz = tx - px, ty - py, tz - pz
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        dot = ax * bx + ay * by + az * bz + aw * bw
+        self.q_goal[slot] = (bx, by, bz, bw)  # exactly as given: the orientation on arrival
+        if dot < 0.0:  # shortest path: q and -q are the same rotation
+            bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
+        dot = min(dot, 1.0)
+        sl_theta = math.acos(dot)
+        theta = 2.0 * sl_theta  # rotation angle between the two orientations
+        if length < EPS_LEN and theta < EPS_ANGLE:
+            return False
+        rate_v, rate_a = math.inf, math.inf
+        if length >= EPS_LEN:
+            unit = np.array((dx / length, dy / length, dz / length))
+            scalar = bool(self.lin_scalar[slot])
+            rate_v = axis_cap(self.vmax[slot], scalar, unit) / length
+            rate_a = axis_cap(self.amax[slot], scalar, unit) / length
+        axis = (0.0, 0.0, 0.0)
+        if theta >= EPS_ANGLE:
+            # relative rotation q1 * conj(q0); its vector part is the axis times sin(theta / 2)
+            rx = bw * -ax + bx * aw + by * -az - bz * -ay
+            ry = bw * -ay - bx * -az + by * aw + bz * -ax
+            rz = bw * -az + bx * -ay - by * -ax + bz * aw
+            sin_half = math.sqrt(rx * rx + ry * ry + rz * rz)
+            axis = (
+                (rx / sin_half, ry / sin_half, rz / sin_half) if sin_half > 0 else (0.0, 0.0, 1.0)
+            )
+            unit_axis = np.array(axis)
+            scalar = bool(self.ang_scalar[slot])
+            rate_v = min(rate_v, axis_cap(self.wmax[slot], scalar, unit_axis) / theta)
+            rate_a = min(rate_a, axis_cap(self.alpha[slot], scalar, unit_axis) / theta)
+        self.p0[slot] = (px, py, pz)
+        self.p1[slot] = (tx, ty, tz)
+        self.q0[slot] = (ax, ay, az, aw)
+        self.q1[slot] = (bx, by, bz, bw)
+        self.sl_dot[slot] = dot
+        self.sl_theta[slot] = sl_theta
+        self.sl_sin[slot] = math.sin(sl_theta)
+        self.theta[slot] = theta
+        self.axis[slot] = axis
+        self.u[slot] = 0.0
+        self.du[slot] = 0.0
+        self.u_vmax[slot] = rate_v
+        self.u_amax[slot] = rate_a
+        self.mode[slot] = _POSE
+        return True
+
+    def _finish(self, slot: int, reached: bool) -> None:
+        # The velocity of the step that arrived stays visible for that step; it is zeroed at
+        # the start of the next advance unless a new segment is under way by then.
+        self._plans[slot] = None
+        self.mode[slot] = _IDLE
+        self.du[slot] = 0.0
+        self._stopped.append(slot)
+        self._on_motion_end(slot, reached)
+
+    # ----- integration (numpy, every step) --------------------------------------------------
+
+    def advance(self, dt: float) -> None:
+        """Move every slot by one step of ``dt`` seconds."""
+        if self._high == 0:
+            return
+        if self._stopped:
+            idle = [s for s in self._stopped if self.mode[s] == _IDLE and self.row[s] >= 0]
+            self._stopped.clear()
+            if idle:
+                rows = self.row[idle]
+                self._store.velocity[rows] = 0.0
+                self._store.angular_velocity[rows] = 0.0
+                self.carry[idle] = 0.0
+        mode = self.mode[: self._high]
+        pose_slots = np.flatnonzero(mode == _POSE)
+        if len(pose_slots):
+            self._advance_pose(pose_slots, dt)
+        vel_slots = np.flatnonzero(mode == _VELOCITY)
+        if len(vel_slots):
+            self._advance_velocity(vel_slots, dt)
+
+    def _advance_pose(self, s: np.ndarray, dt: float) -> None:
+        store = self._store
+        u = self.u[s]
+        amax = self.u_amax[s]
+        remaining = 1.0 - u
+        # `carry`: share of this step's acceleration budget already spent by the previous
+        # segment's last step (its velocity must fall to zero and the new one rise from it).
+        carry = self.carry[s]
+        rate = np.minimum(self.du[s] + amax * dt * (1.0 - carry), self.u_vmax[s])
+        rate = np.minimum(rate, braking_rate(remaining, amax, dt))
+        step = rate * dt
+        arrived = step >= remaining - 1e-12
+        any_arrived = bool(arrived.any())
+        u_new = np.where(arrived, 1.0, u + step) if any_arrived else u + step
+        self.u[s] = u_new
+        self.du[s] = np.where(arrived, 0.0, rate) if any_arrived else rate
+        if any_arrived:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                self.carry[s] = np.where(arrived, np.nan_to_num(rate / (amax * dt)), 0.0)
+        elif carry.any():
+            self.carry[s] = 0.0
+        rows = self.row[s]
+        old_pos = store.position[rows]
+        p0 = self.p0[s]
+        pos = p0 + (self.p1[s] - p0) * u_new[:, None]
+        if any_arrived:
+            pos[arrived] = self.p1[s[arrived]]
+        store.velocity[rows] = (pos - old_pos) / dt
+        store.position[rows] = pos
+        # Orientation work only for segments that rotate (pure translations keep theirs).
+        turning = self.theta[s] > 0.0
+        if turning.any():
+            t, r, un = s[turning], rows[turning], u_new[turning]
+            quat = quat_slerp_batch(
+                self.q0[t], self.q1[t], un, self.sl_dot[t], self.sl_theta[t], self.sl_sin[t]
+            )
+            done = arrived[turning]
+            if done.any():
+                quat[done] = self.q_goal[t[done]]
+            store.orientation[r] = quat
+            store.angular_velocity[r] = (
+                self.axis[t] * ((un - u[turning]) * self.theta[t] / dt)[:, None]
+            )
+        if not turning.all():
+            store.angular_velocity[rows[~turning]] = 0.0
+        store.mark_moved(rows)
+        if any_arrived:
+            for slot in s[arrived].tolist():
+                if self.mode[slot] == _POSE and self._plans[slot] is not None:
+                    self._plan_next(slot)
+
+    def _advance_velocity(self, s: np.ndarray, dt: float) -> None:
+        store = self._store
+        rows = self.row[s]
+        acc = np.concatenate([self.amax[s], self.alpha[s][:, 2:3]], axis=1) * dt
+        cap = np.concatenate([self.vmax[s], self.wmax[s][:, 2:3]], axis=1)
+        vel = self.vel[s]
+        vel = vel + np.clip(self.cmd[s] - vel, -acc, acc)
+        vel = np.clip(vel, -cap, cap)
+        self.vel[s] = vel
+        yaw = yaw_from_quats(store.orientation[rows])
+        cos, sin = np.cos(yaw), np.sin(yaw)
+        world = np.stack(
+            [cos * vel[:, 0] - sin * vel[:, 1], sin * vel[:, 0] + cos * vel[:, 1], vel[:, 2]],
+            axis=1,
+        )
+        store.position[rows] += world * dt
+        new_yaw = yaw + vel[:, 3] * dt
+        half = 0.5 * new_yaw
+        store.orientation[rows] = np.stack(
+            [np.zeros_like(half), np.zeros_like(half), np.sin(half), np.cos(half)], axis=1
+        )
+        store.velocity[rows] = world
+        store.angular_velocity[rows] = np.stack(
+            [np.zeros_like(yaw), np.zeros_like(yaw), vel[:, 3]], axis=1
+        )
+        moving = np.any(vel != 0.0, axis=1)
+        if moving.any():
+            store.mark_moved(rows[moving])

@@ -1,0 +1,5 @@
+"""The simulation kernel: the clock, the step loop as named phases, parameters, plugins,
+profiling.
+
+May import ``agents`` and below.
+"""

@@ -1,0 +1,484 @@
+"""Recording the simulation to an animated GIF or an MP4 video.
+
+A :class:`SimulationRecorder` renders frames with PyBullet's software renderer
+(``ER_TINY_RENDERER``), so it works headless (``p.DIRECT``) as well as with a GUI. It hooks
+into the step loop through the ``post_step`` event and never adds branches to ``step_once``.
+
+Frame timing is measured in *slots* of ``1 / fps`` seconds, slot ``k`` starting at
+``k / fps`` after the recording started:
+
+* ``time_base="sim"``: slots are sim seconds. After ``n`` steps every slot with
+  ``k / fps <= n * timestep`` is due, computed from the integer step count each time (no float
+  accumulation), so playback runs at 1x sim speed. When ``fps`` exceeds the step rate a frame
+  fills several slots.
+* ``time_base="real"``: slots are wall seconds, checked after each step; a frame fills every
+  slot that passed since the previous one, so playback shows the actual execution speed.
+
+Slot 0 is captured when the recording starts. With a ``duration`` the recording holds
+``ceil(duration * fps)`` slots and stops (and saves) by itself at the first step at or past
+``duration``.
+
+The optional packages (Pillow for GIF, imageio with PyAV for MP4) are checked when the
+recorder is created, not when a long run ends.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import numbers
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol, cast
+
+import numpy as np
+import pybullet as p
+
+from fleet_async.core.base.events import EventBus, SimEvents
+from fleet_async.core.view import gui
+from fleet_async.core.view.video_writers import WRITERS as _WRITERS
+
+if TYPE_CHECKING:
+    from fleet_async.core.sim.params import SimulationParams
+
+__all__ = ["CAMERA_MODES", "TIME_BASES", "RecordableSim", "RecordingApi", "SimulationRecorder"]
+
+logger = logging.getLogger(__name__)
+
+CAMERA_MODES = ("auto", "gui", "orbit", "manual")
+TIME_BASES = ("sim", "real")
+CAMERA_PARAM_KEYS = ("distance", "yaw", "pitch", "target")
+GIF_MAX_FPS = 50
+"""GIF delays are whole 1/100 s and players slow down delays under 2/100 s."""
+ORBIT_FRAMES_WITHOUT_DURATION = 360
+"""Without a duration, an orbit turns ``orbit_degrees`` every this many frames."""
+
+_FOV_DEG = 60.0  # matches the 30-degree half angle gui.camera_view frames the scene for
+_EPS = 1e-9  # absorbs float error in products such as 3 * 0.1 * 10
+
+CameraView = tuple[float, float, float, list[float]]
+"""(distance m, yaw deg, pitch deg, target [x, y, z] m) of a camera orbiting its target."""
+
+
+class RecordableSim(Protocol):
+    """What a recorder needs from the simulation."""
+
+    @property
+    def client(self) -> int: ...
+    @property
+    def is_gui(self) -> bool: ...
+    @property
+    def params(self) -> SimulationParams: ...
+    @property
+    def events(self) -> EventBus: ...
+    def sync_pybullet(self) -> int: ...
+    def compute_scene_bounds(self) -> tuple[list[float], list[float]]: ...
+
+
+# ----- argument checks ---------------------------------------------------------------------
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _positive_int(name: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) <= 0:
+        raise ValueError(f"recording {name}: expected a positive integer, got {value!r}")
+    return int(value)
+
+
+def _parse_camera_params(params: Any) -> dict[str, Any]:
+    """Check ``camera_params`` of the manual camera; return a copy."""
+    if not isinstance(params, dict):
+        raise ValueError(
+            f"recording camera_params: expected a dict with keys {list(CAMERA_PARAM_KEYS)}, "
+            f"got {params!r}"
+        )
+    unknown = sorted(set(params) - set(CAMERA_PARAM_KEYS))
+    if unknown:
+        raise ValueError(
+            f"recording camera_params: unknown key(s) {unknown}; "
+            f"valid keys are {list(CAMERA_PARAM_KEYS)}"
+        )
+    for key in ("distance", "yaw", "pitch"):
+        if key in params and not _is_number(params[key]):
+            raise ValueError(
+                f"recording camera_params.{key}: expected a number, got {params[key]!r}"
+            )
+    distance = params.get("distance", 1.0)
+    if distance <= 0:
+        raise ValueError(
+            f"recording camera_params.distance: expected a number > 0 (m), got {distance!r}"
+        )
+    if "target" in params:
+        target = params["target"]
+        if not (
+            isinstance(target, (list, tuple)) and len(target) == 3 and all(map(_is_number, target))
+        ):
+            raise ValueError(
+                f"recording camera_params.target: expected [x, y, z] (m), got {target!r}"
+            )
+    return dict(params)
+
+
+# ----- the recorder ------------------------------------------------------------------------
+
+
+class SimulationRecorder:
+    """Renders the simulation at a fixed frame rate and saves it as a GIF or MP4.
+
+    Args:
+        sim: The simulation to record.
+        output: Output file; the extension picks the format (``.gif`` or ``.mp4``).
+        width: Frame width in pixels (even for ``.mp4``).
+        height: Frame height in pixels (even for ``.mp4``).
+        fps: Frames per second of the recording, for capture and playback (<= 50 for GIF).
+        duration: Length of the recording: sim seconds (``time_base="sim"``) or wall seconds
+            (``"real"``); None records until :meth:`stop`.
+        camera_mode: ``"auto"`` frames the scene as it is at :meth:`start`
+            (``sim.compute_scene_bounds`` with ``params.camera_config``), and becomes ``"gui"``
+            when the simulation has a GUI; ``"gui"`` follows the GUI's camera; ``"orbit"`` is
+            the auto view with the yaw turning; ``"manual"`` uses ``camera_params``.
+        time_base: ``"sim"`` or ``"real"``: the clock ``fps`` and ``duration`` refer to.
+        orbit_degrees: ``"orbit"`` only: degrees the camera turns over ``duration``, or every
+            :data:`ORBIT_FRAMES_WITHOUT_DURATION` frames when there is no duration
+            (default 360).
+        camera_params: ``"manual"`` only (and required there): ``distance`` (m), ``yaw`` and
+            ``pitch`` (degrees), ``target`` ([x, y, z] m). Keys left out take the auto view's
+            value.
+        clock: Wall clock in seconds for ``time_base="real"`` (injectable for tests).
+
+    Raises:
+        ValueError: for a bad argument, naming it and its value.
+        ImportError: when the package the format needs is missing, with the install command.
+    """
+
+    def __init__(
+        self,
+        sim: RecordableSim,
+        output: str | os.PathLike[str] = "recording.gif",
+        width: int = 800,
+        height: int = 600,
+        fps: int = 15,
+        duration: float | None = None,
+        camera_mode: str = "auto",
+        time_base: str = "sim",
+        *,
+        orbit_degrees: float | None = None,
+        camera_params: dict[str, Any] | None = None,
+        clock: Callable[[], float] = time.perf_counter,
+    ) -> None:
+        self._sim = sim
+        self._path = Path(output)
+        self._width = _positive_int("width", width)
+        self._height = _positive_int("height", height)
+        self._fps = _positive_int("fps", fps)
+        self._check_format()
+        if duration is not None and not (_is_number(duration) and duration > 0):
+            raise ValueError(
+                f"recording duration: expected a number > 0 (s) or None, got {duration!r}"
+            )
+        if time_base not in TIME_BASES:
+            raise ValueError(
+                f"recording time_base: expected one of {TIME_BASES}, got {time_base!r}"
+            )
+        self._duration = None if duration is None else float(duration)
+        self._time_base = time_base
+        self._total_slots = (
+            None if duration is None else math.ceil(float(duration) * self._fps - _EPS)
+        )
+        self._camera_mode = self._resolve_camera_mode(camera_mode, orbit_degrees, camera_params)
+        self._orbit_degrees = 360.0 if orbit_degrees is None else float(orbit_degrees)
+        self._camera_params = {} if camera_params is None else _parse_camera_params(camera_params)
+        self._clock = clock
+        self._writer = _WRITERS[self._path.suffix.lower()](self._path, self._fps)
+        self._view: CameraView | None = None
+        self._recording = False
+        self._stopped = False
+        self._slots = 0  # slots written so far
+        self._steps = 0  # post_step events seen since start
+        self._wall0 = 0.0
+
+    def _check_format(self) -> None:
+        suffix = self._path.suffix.lower()
+        if suffix not in _WRITERS:
+            raise ValueError(
+                f"recording output: unsupported file extension {self._path.suffix!r} "
+                f"in {str(self._path)!r}; use one of {sorted(_WRITERS)}"
+            )
+        if suffix == ".gif" and self._fps > GIF_MAX_FPS:
+            raise ValueError(
+                f"recording fps: {self._fps} is too high for a GIF (at most {GIF_MAX_FPS}); "
+                "lower fps or record an .mp4"
+            )
+        if suffix == ".mp4":
+            for name, value in (("width", self._width), ("height", self._height)):
+                if value % 2:
+                    raise ValueError(f"recording {name}: H.264 MP4 needs an even size, got {value}")
+
+    def _resolve_camera_mode(self, mode: Any, orbit_degrees: Any, camera_params: Any) -> str:
+        if mode not in CAMERA_MODES:
+            raise ValueError(f"recording camera_mode: expected one of {CAMERA_MODES}, got {mode!r}")
+        if orbit_degrees is not None:
+            if mode != "orbit":
+                raise ValueError(
+                    f"recording orbit_degrees: applies to camera_mode='orbit', not {mode!r}"
+                )
+            if not _is_number(orbit_degrees):
+                raise ValueError(
+                    f"recording orbit_degrees: expected a number, got {orbit_degrees!r}"
+                )
+        if (camera_params is not None) != (mode == "manual"):
+            raise ValueError(
+                "recording camera_params: required by camera_mode='manual' and only used there "
+                f"(camera_mode={mode!r}, camera_params={camera_params!r})"
+            )
+        if mode == "auto" and self._sim.is_gui:
+            return "gui"
+        if mode == "gui" and not self._sim.is_gui:
+            raise ValueError(
+                "recording camera_mode: 'gui' needs a GUI, but the simulation has none"
+            )
+        return str(mode)
+
+    # ----- read-only state ------------------------------------------------------------------
+
+    @property
+    def output(self) -> str:
+        """The output file path."""
+        return str(self._path)
+
+    @property
+    def camera_mode(self) -> str:
+        """The camera mode in effect ("auto" becomes "gui" with a GUI)."""
+        return self._camera_mode
+
+    @property
+    def time_base(self) -> str:
+        """``"sim"`` or ``"real"``."""
+        return self._time_base
+
+    @property
+    def fps(self) -> int:
+        """Frames per second."""
+        return self._fps
+
+    @property
+    def duration(self) -> float | None:
+        """Recording length in seconds of the time base, or None."""
+        return self._duration
+
+    @property
+    def is_recording(self) -> bool:
+        """Whether frames are being captured (between :meth:`start` and :meth:`stop`)."""
+        return self._recording
+
+    @property
+    def frame_count(self) -> int:
+        """Frames recorded so far (slots of ``1 / fps`` s; an MP4 holds exactly this many)."""
+        return self._slots
+
+    # ----- camera and frames ----------------------------------------------------------------
+
+    def camera_view(self, frame_index: int = 0) -> CameraView:
+        """(distance m, yaw deg, pitch deg, target m) of the camera for frame ``frame_index``."""
+        if self._camera_mode == "gui":
+            cam = p.getDebugVisualizerCamera(physicsClientId=self._sim.client)
+            return float(cam[10]), float(cam[8]), float(cam[9]), [float(v) for v in cam[11]]
+        if self._view is None:
+            self._view = self._fixed_view()
+        distance, yaw, pitch, target = self._view
+        if self._camera_mode == "orbit":
+            per_frame = (
+                self._orbit_degrees / self._total_slots
+                if self._total_slots is not None
+                else self._orbit_degrees / ORBIT_FRAMES_WITHOUT_DURATION
+            )
+            yaw += per_frame * frame_index
+        return distance, yaw, pitch, list(target)
+
+    def _fixed_view(self) -> CameraView:
+        center, extent = self._sim.compute_scene_bounds()
+        distance, yaw, pitch, target = gui.camera_view(
+            self._sim.params.camera_config, center, extent
+        )
+        cp = self._camera_params
+        return (
+            float(cp.get("distance", distance)),
+            float(cp.get("yaw", yaw)),
+            float(cp.get("pitch", pitch)),
+            [float(v) for v in cp.get("target", target)],
+        )
+
+    def capture_frame(self, frame_index: int = 0) -> np.ndarray:
+        """Render the scene now with frame ``frame_index``'s camera.
+
+        Returns:
+            An RGB image, uint8 array of shape (height, width, 3).
+        """
+        self._sim.sync_pybullet()  # kinematic poses live in the store; PyBullet lags lazily
+        distance, yaw, pitch, target = self.camera_view(frame_index)
+        view = p.computeViewMatrixFromYawPitchRoll(target, distance, yaw, pitch, 0.0, 2)
+        projection = p.computeProjectionMatrixFOV(
+            _FOV_DEG, self._width / self._height, distance * 0.01, distance * 10.0 + 10.0
+        )
+        _, _, rgba, _, _ = p.getCameraImage(
+            self._width,
+            self._height,
+            view,
+            projection,
+            renderer=p.ER_TINY_RENDERER,
+            flags=p.ER_NO_SEGMENTATION_MASK,
+            physicsClientId=self._sim.client,
+        )
+        pixels = np.asarray(rgba, dtype=np.uint8).reshape(self._height, self._width, 4)
+        return np.ascontiguousarray(pixels[:, :, :3])
+
+    # ----- start, capture, stop -------------------------------------------------------------
+
+    def start(self) -> None:
+        """Create the output's parent directories, capture frame 0 and hook into the loop.
+
+        Raises:
+            RuntimeError: if this recorder was already started.
+        """
+        if self._recording or self._stopped:
+            raise RuntimeError(f"SimulationRecorder({self.output!r}) was already started")
+        self._path.parent.mkdir(parents=True, exist_ok=True)
+        self._view = None
+        self._wall0 = self._clock()
+        self._write_slots(1)
+        # Low priority: the frame shows what other post-step handlers did this step.
+        self._sim.events.on(SimEvents.POST_STEP, self._on_post_step, priority=-100)
+        self._recording = True
+        logger.info("recording to %s (%d fps, %s time)", self.output, self._fps, self._time_base)
+
+    def _on_post_step(self, **_: Any) -> None:
+        self._steps += 1
+        if self._time_base == "sim":
+            timestep = self._sim.params.timestep
+            due = math.floor(self._steps * self._fps * timestep + _EPS) + 1
+            done = self._duration is not None and (
+                self._steps >= math.ceil(self._duration / timestep - _EPS)
+            )
+        else:
+            elapsed = self._clock() - self._wall0
+            due = math.floor(elapsed * self._fps + _EPS) + 1
+            done = self._duration is not None and elapsed >= self._duration
+        self._write_slots(due)
+        if done:
+            self.stop()
+
+    def _write_slots(self, due: int) -> None:
+        """Fill slots up to (excluding) ``due`` with the current scene."""
+        if self._total_slots is not None:
+            due = min(due, self._total_slots)
+        if due <= self._slots:
+            return
+        if self._camera_mode == "orbit":  # each slot has its own yaw
+            for k in range(self._slots, due):
+                self._writer.add(self.capture_frame(k), 1)
+        else:
+            self._writer.add(self.capture_frame(self._slots), due - self._slots)
+        self._slots = due
+
+    def stop(self) -> str | None:
+        """Stop capturing and save the file.
+
+        Returns:
+            The output path, or None if the recorder was not recording.
+        """
+        if not self._recording:
+            return None
+        self._recording = False
+        self._stopped = True
+        self._sim.events.off(SimEvents.POST_STEP, self._on_post_step)
+        self._writer.close()
+        logger.info("saved recording %s (%d frames)", self.output, self._slots)
+        return self.output
+
+
+# ----- the simulation's API ----------------------------------------------------------------
+
+_RECORDER_KWARGS = ("orbit_degrees", "camera_params", "clock")
+
+
+class RecordingApi:
+    """``start_recording`` / ``stop_recording`` for MultiRobotSimulationCore."""
+
+    _recorder: SimulationRecorder | None = None
+
+    def start_recording(
+        self,
+        output: str | os.PathLike[str] = "recording.gif",
+        width: int = 800,
+        height: int = 600,
+        fps: int = 15,
+        duration: float | None = None,
+        camera_mode: str = "auto",
+        time_base: str = "sim",
+        **kwargs: Any,
+    ) -> SimulationRecorder:
+        """Start recording the simulation to an animated GIF or an MP4.
+
+        Frame 0 is captured now; later frames as the simulation steps (see
+        :class:`SimulationRecorder` for the arguments). The file is saved by
+        :meth:`stop_recording`, when ``duration`` has passed, or when ``run_simulation`` ends.
+
+        Args:
+            output: ``.gif`` (needs Pillow) or ``.mp4`` (needs imageio + PyAV) path; parent
+                directories are created.
+            width: Frame width in pixels.
+            height: Frame height in pixels.
+            fps: Frames per second, for capture and playback.
+            duration: Sim seconds (``time_base="sim"``) or wall seconds (``"real"``); None
+                records until :meth:`stop_recording`.
+            camera_mode: ``"auto"``, ``"gui"``, ``"orbit"`` or ``"manual"``.
+            time_base: ``"sim"`` or ``"real"``.
+            **kwargs: ``orbit_degrees``, ``camera_params`` or ``clock`` for the recorder.
+
+        Returns:
+            The running recorder.
+
+        Raises:
+            RuntimeError: if a recording is already running.
+            TypeError: for unknown keyword arguments, naming them.
+            ValueError: for bad arguments, naming them and their values.
+            ImportError: when the package the format needs is missing.
+        """
+        running = self._recorder
+        if running is not None and running.is_recording:
+            raise RuntimeError(
+                f"start_recording: a recording to {running.output!r} is already running; "
+                "call stop_recording() first"
+            )
+        unknown = sorted(set(kwargs) - set(_RECORDER_KWARGS))
+        if unknown:
+            raise TypeError(
+                f"start_recording: unknown keyword argument(s) {unknown}; "
+                f"valid ones are {list(_RECORDER_KWARGS)}"
+            )
+        # This mixin is only used by MultiRobotSimulationCore, which is a RecordableSim.
+        sim = cast("RecordableSim", self)
+        recorder = SimulationRecorder(
+            sim, output, width, height, fps, duration, camera_mode, time_base, **kwargs
+        )
+        recorder.start()
+        self._recorder = recorder
+        return recorder
+
+    def stop_recording(self) -> str | None:
+        """Stop the running recording and save it.
+
+        Returns:
+            The saved file's path, or None if nothing was recording.
+        """
+        recorder, self._recorder = self._recorder, None
+        return recorder.stop() if recorder is not None else None
+
+    def _stop_recording_after_run(self) -> None:
+        """Called when ``run_simulation`` ends: save a recording still in progress."""
+        self.stop_recording()

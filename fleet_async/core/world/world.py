@@ -1,0 +1,434 @@
+"""The world: every object of one simulation, its row in the state store, and attachments.
+
+``MultiRobotSimulationCore`` owns the clock and the step loop; ``World`` owns what is in the
+scene. SimObject handles call back into it (``sim.world``) when they write their pose, change
+their collision mode or attach another object.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pybullet as p
+
+from fleet_async.core.base.events import EventBus, SimEvents
+from fleet_async.core.base.types import CollisionMode
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.world.attachments import Attachment, AttachmentSet
+from fleet_async.core.world.backend import PyBulletBackend
+from fleet_async.core.world.links import resolve_link_index
+from fleet_async.core.world.state import COLLISION_CODES, KinematicState
+
+if TYPE_CHECKING:
+    from fleet_async.core.bodies.sim_object import SimObject
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+__all__ = ["World"]
+
+logger = logging.getLogger(__name__)
+
+
+class World:
+    """Objects, rows and attachments of one simulation.
+
+    Args:
+        sim: The owning simulation (handles are bound to it).
+        backend: The PyBullet adapter.
+        events: The simulation's bus (spawn / removal events).
+        physics: Whether bodies with mass > 0 are dynamic.
+
+    Attributes:
+        in_step: Set by the simulation while ``step_once`` runs; pose writes then stay in the
+            store until a phase needs PyBullet's view.
+    """
+
+    def __init__(
+        self,
+        sim: MultiRobotSimulationCore,
+        backend: PyBulletBackend,
+        events: EventBus,
+        physics: bool,
+    ) -> None:
+        self._sim = sim
+        self._backend = backend
+        self._events = events
+        self._physics = physics
+        self._store = KinematicState()
+        self._attachments = AttachmentSet(self._store, self.link_pose)
+        self._objects: dict[int, SimObject] = {}
+        self._agents: dict[int, SimObject] = {}
+        self._updaters: dict[int, SimObject] = {}
+        self._with_callbacks: dict[int, SimObject] = {}
+        self._dynamic_rows = np.empty(0, dtype=np.int64)
+        self._saved_mass: dict[int, float] = {}
+        self._next_id = 0
+        self.in_step = False
+
+    @property
+    def store(self) -> KinematicState:
+        """The state store."""
+        return self._store
+
+    @property
+    def attachments(self) -> AttachmentSet:
+        """Every parent/child attachment."""
+        return self._attachments
+
+    @property
+    def objects(self) -> list[SimObject]:
+        """Every object, in spawn order."""
+        return list(self._objects.values())
+
+    @property
+    def agents(self) -> list[SimObject]:
+        """Every agent, in spawn order."""
+        return list(self._agents.values())
+
+    @property
+    def object_count(self) -> int:
+        """Number of objects."""
+        return len(self._objects)
+
+    @property
+    def agent_count(self) -> int:
+        """Number of agents."""
+        return len(self._agents)
+
+    def get(self, object_id: int) -> SimObject | None:
+        """The object with ``object_id``, or None."""
+        return self._objects.get(object_id)
+
+    def updaters(self) -> tuple[SimObject, ...]:
+        """Objects whose class overrides ``update(dt)``, in spawn order."""
+        return tuple(self._updaters.values())
+
+    def objects_with_callbacks(self) -> tuple[SimObject, ...]:
+        """Objects with per-object callbacks, in spawn order."""
+        return tuple(self._with_callbacks.values())
+
+    def read_back_dynamic(self) -> None:
+        """After a physics step, copy the poses of dynamic bodies into the store."""
+        if len(self._dynamic_rows):
+            self._backend.read_back(self._store, self._dynamic_rows)
+
+    def clear(self) -> list[SimObject]:
+        """Unbind and forget every object (the PyBullet world is reset by the caller)."""
+        removed = list(self._objects.values())
+        for obj in removed:
+            obj.unbind()
+        for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
+            registry.clear()
+        self._attachments.clear()
+        self._saved_mass.clear()
+        self._dynamic_rows = np.empty(0, dtype=np.int64)
+        self._store.clear()
+        return removed
+
+    def add(self, obj: SimObject, notify: bool = True) -> None:
+        """Register ``obj`` (``SimObject.__init__`` does this when given ``sim_core``).
+
+        Raises:
+            ValueError: if ``obj`` already belongs to this or another simulation.
+        """
+        if obj.sim_core is not None or obj.object_id >= 0:
+            owner = "this" if obj.sim_core is self._sim else "another"
+            raise ValueError(f"add_object: {obj!r} already belongs to {owner} simulation")
+        body = obj.body_id
+        pos: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
+        orn: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0, 1.0)
+        if body >= 0:
+            pos, orn = self._backend.read_pose(body)
+        elif obj.state_row >= 0:
+            pose = obj.get_pose()
+            pos, orn = pose.position, pose.orientation
+        dynamic = self._physics and obj.mass > 0
+        object_id = self._next_id
+        self._next_id += 1
+        row = self._store.allocate(
+            object_id,
+            body,
+            pos,
+            orn,
+            kinematic=not dynamic,
+            collision_code=COLLISION_CODES[obj.collision_mode.value],
+        )
+        obj.bind(self._sim, self._store, row, object_id)
+        self._objects[object_id] = obj
+        if obj.is_agent:
+            self._agents[object_id] = obj
+        if obj.overrides_update():
+            self._updaters[object_id] = obj
+        if obj.has_callbacks():
+            self._with_callbacks[object_id] = obj
+        if dynamic:
+            self._dynamic_rows = np.append(self._dynamic_rows, row)
+        if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
+            p.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self._backend.client)
+        if notify:
+            self.announce(obj)
+
+    def announce(self, obj: SimObject) -> None:
+        """Emit the spawn events of ``obj`` (``add`` does it unless told not to)."""
+        self._events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
+        if obj.spawned_event is not None:
+            self._events.emit(obj.spawned_event, sim=self._sim, agent=obj)
+
+    def remove(self, obj: SimObject) -> None:
+        """Remove ``obj`` from the simulation and PyBullet; its children are detached in place.
+
+        Raises:
+            ValueError: if ``obj`` is not part of this simulation.
+        """
+        if obj.sim_core is not self._sim or self._objects.get(obj.object_id) is not obj:
+            raise ValueError(f"remove_object: {obj!r} is not part of this simulation")
+        parent = obj.get_attached_parent()
+        if parent is not None:
+            self.detach(parent, obj, None, None)
+        for child in obj.get_attached_objects():
+            self.detach(obj, child, None, None)
+        obj.on_removed()
+        object_id, row = obj.object_id, obj.state_row
+        for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
+            registry.pop(object_id, None)
+        self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
+        self._backend.remove_body(obj.body_id)
+        try:
+            # Handlers still see the object's id and last pose.
+            self._events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
+            if obj.removed_event is not None:
+                self._events.emit(obj.removed_event, sim=self._sim, agent=obj)
+        finally:
+            obj.unbind()
+            self._store.release(row)
+
+    def set_poses(
+        self,
+        object_ids: Sequence[int],
+        positions: np.ndarray,
+        orientations: np.ndarray,
+        *,
+        preserve_velocity: bool = True,
+    ) -> None:
+        """Set the poses of N objects in one call (arrays of shape (N, 3) and (N, 4)).
+
+        Raises:
+            ValueError: on shape mismatch, non-finite values or a zero quaternion.
+            KeyError: for an object id that is not registered.
+        """
+        rows = self._rows_of(object_ids)
+        pos = np.asarray(positions, dtype=float)
+        orn = np.asarray(orientations, dtype=float)
+        n = len(rows)
+        if pos.shape != (n, 3) or orn.shape != (n, 4):
+            raise ValueError(
+                f"set_poses: expected positions (N, 3) and orientations (N, 4) for N={n}, "
+                f"got {pos.shape} and {orn.shape}"
+            )
+        if not (np.isfinite(pos).all() and np.isfinite(orn).all()):
+            raise ValueError("set_poses: positions and orientations must be finite")
+        norms = np.linalg.norm(orn, axis=1)
+        if (norms < 1e-12).any():
+            bad = int(np.flatnonzero(norms < 1e-12)[0])
+            raise ValueError(
+                f"set_poses: orientation of object {object_ids[bad]} is a zero quaternion"
+            )
+        store = self._store
+        store.position[rows] = pos
+        store.orientation[rows] = orn / norms[:, None]
+        store.mark_moved(rows)
+        # Only objects that carry something, or that PyBullet owns, need per-object work.
+        carried: list[int] = []
+        if len(self._attachments):
+            for object_id in self._attachments.parent_ids().intersection(
+                int(i) for i in object_ids
+            ):
+                parent = self._objects[object_id]
+                self._attachments.follow_parent(parent)
+                carried += [c.state_row for c in self._attachments.descendants(parent)]
+        for row in rows[~store.kinematic[rows]].tolist():
+            self._push_dynamic(row, preserve_velocity)
+        if not self.in_step:
+            self._backend.push_rows(
+                store, np.concatenate([rows, np.array(carried, dtype=np.int64)])
+            )
+
+    def get_poses(self, object_ids: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """Return (positions (N, 3), orientations (N, 4)) copies for N objects.
+
+        Raises:
+            KeyError: for an object id that is not registered.
+        """
+        rows = self._rows_of(object_ids)
+        return self._store.position[rows].copy(), self._store.orientation[rows].copy()
+
+    def _rows_of(self, object_ids: Sequence[int]) -> np.ndarray:
+        try:
+            return np.array([self._objects[int(i)].state_row for i in object_ids], dtype=np.int64)
+        except KeyError as exc:
+            raise KeyError(
+                f"object id {exc.args[0]} is not registered in this simulation"
+            ) from None
+
+    # ----- hooks called by SimObject handles ----------------------------------------------
+
+    def on_pose_written(self, obj: SimObject, preserve_velocity: bool) -> None:
+        """A handle changed its row's pose: move its children, sync PyBullet if needed now."""
+        self._attachments.follow_parent(obj)
+        row = obj.state_row
+        if not self._store.kinematic[row]:
+            self._push_dynamic(row, preserve_velocity)
+        if not self.in_step:
+            rows = [row] + [c.state_row for c in self._attachments.descendants(obj)]
+            self._backend.push_rows(self._store, np.array(rows, dtype=np.int64))
+
+    def on_collision_mode_changed(
+        self, obj: SimObject, old: CollisionMode, new: CollisionMode
+    ) -> None:
+        """Apply a collision mode change to PyBullet's contact filter."""
+        if obj.body_id < 0:
+            return
+        if new is CollisionMode.DISABLED:
+            p.setCollisionFilterGroupMask(
+                obj.body_id, -1, 0, 0, physicsClientId=self._backend.client
+            )
+        elif old is CollisionMode.DISABLED:
+            p.setCollisionFilterGroupMask(
+                obj.body_id, -1, 1, -1, physicsClientId=self._backend.client
+            )
+
+    def on_object_callbacks_changed(self, obj: SimObject) -> None:
+        """Track which objects have per-object callbacks (so steps skip the others)."""
+        if obj.has_callbacks():
+            self._with_callbacks[obj.object_id] = obj
+        else:
+            self._with_callbacks.pop(obj.object_id, None)
+
+    def _push_dynamic(self, row: int, preserve_velocity: bool) -> None:
+        body = int(self._store.body_id[row])
+        lin, ang = p.getBaseVelocity(body, physicsClientId=self._backend.client)
+        self._backend.push_rows(self._store, np.array([row]))
+        if preserve_velocity:
+            p.resetBaseVelocity(body, lin, ang, physicsClientId=self._backend.client)
+        else:
+            p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=self._backend.client)
+
+    def sync_object(self, obj: SimObject) -> None:
+        """Push ``obj``'s pose to PyBullet now if the store has a newer one."""
+        row = obj.state_row
+        if self._store.dirty[row]:
+            self._backend.push_rows(self._store, np.array([row]))
+
+    def link_pose(self, obj: SimObject, link_index: int) -> tuple[np.ndarray, np.ndarray]:
+        """World (position, orientation) of one link of ``obj``, from PyBullet's kinematics."""
+        self.sync_object(obj)
+        state = p.getLinkState(
+            obj.body_id,
+            link_index,
+            computeForwardKinematics=1,
+            physicsClientId=self._backend.client,
+        )
+        return np.asarray(state[4], dtype=float), np.asarray(state[5], dtype=float)
+
+    # ----- attach / detach (SimObject.attach_object and detach_object land here) ----------
+
+    def attach(
+        self,
+        parent: SimObject,
+        child: SimObject,
+        link: int | str,
+        relative_pose: Pose | None,
+        joint_type: int,
+        keep_world_pose: bool,
+    ) -> bool:
+        """Attach ``child`` to ``parent``'s ``link``; see ``SimObject.attach_object``."""
+        if child is parent:
+            raise ValueError(f"attach_object: cannot attach {parent!r} to itself")
+        if child.sim_core is not self._sim:
+            raise ValueError(
+                f"attach_object: {child!r} is not part of the same simulation as {parent!r}"
+            )
+        held = self._attachments.of_child(child)
+        if held is not None:
+            where = "this object" if held.parent is parent else repr(held.parent)
+            raise ValueError(
+                f"attach_object: {child!r} is already attached to {where}; detach it first"
+            )
+        if self._attachments.is_ancestor(child, parent):
+            raise ValueError(
+                f"attach_object: {child!r} carries {parent!r}; attaching would make a cycle"
+            )
+        if relative_pose is not None and keep_world_pose:
+            raise ValueError(
+                "attach_object: give either relative_pose or keep_world_pose=True, not both"
+            )
+        if joint_type != p.JOINT_FIXED:
+            raise ValueError(
+                f"attach_object: joint_type {joint_type!r} is not supported; "
+                "only pybullet.JOINT_FIXED (4) is"
+            )
+        link_index = (
+            resolve_link_index(parent.body_id, link, physics_client_id=self._backend.client)
+            if parent.body_id >= 0
+            else -1
+        )
+        if keep_world_pose:
+            link_pos, link_orn = (
+                self.link_pose(parent, link_index)
+                if link_index != -1
+                else (
+                    self._store.position[parent.state_row],
+                    self._store.orientation[parent.state_row],
+                )
+            )
+            relative = (
+                Pose.from_arrays_unchecked(link_pos.copy(), link_orn.copy())
+                .inverse()
+                .compose(child.get_pose())
+            )
+        else:
+            relative = relative_pose if relative_pose is not None else Pose([0.0, 0.0, 0.0])
+        att = Attachment(parent, child, link_index, relative)
+        self._attachments.add(att)
+        row = child.state_row
+        if not self._store.kinematic[row]:
+            # A carried body is moved by its carrier, not by dynamics, until it is dropped.
+            self._saved_mass[child.object_id] = child.mass
+            self._backend.set_body_mass(child.body_id, 0.0)
+            self._store.kinematic[row] = True
+            self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
+        self._attachments.place_child(att)
+        if not self.in_step:
+            self._backend.sync(self._store)
+        return True
+
+    def detach(
+        self,
+        parent: SimObject,
+        child: SimObject,
+        drop_pose: Pose | None,
+        drop_relative_pose: Pose | None,
+    ) -> bool:
+        """Detach ``child`` from ``parent``; see ``SimObject.detach_object``."""
+        if drop_pose is not None and drop_relative_pose is not None:
+            raise ValueError("detach_object: give either drop_pose or drop_relative_pose, not both")
+        att = self._attachments.of_child(child)
+        if att is None or att.parent is not parent:
+            logger.warning(
+                "detach_object: %r is not attached to %r; nothing detached", child, parent
+            )
+            return False
+        self._attachments.remove(child)
+        mass = self._saved_mass.pop(child.object_id, None)
+        if mass is not None:
+            row = child.state_row
+            self._backend.set_body_mass(child.body_id, mass)
+            self._store.kinematic[row] = False
+            self._dynamic_rows = np.append(self._dynamic_rows, row)
+        if drop_pose is not None:
+            child.set_pose(drop_pose, preserve_velocity=False)
+        elif drop_relative_pose is not None:
+            child.set_pose(child.get_pose().compose(drop_relative_pose), preserve_velocity=False)
+        return True
