@@ -29,6 +29,7 @@ from fleet_async import (
     WaitAction,
 )
 
+BACKENDS = ("asyncio", "trio")
 WARMUP = 10
 """Untimed steps before the fleet measurements (as in benchmarks/fleet_bench.py)."""
 
@@ -61,6 +62,25 @@ def sleep_bench(tasks: int, waits: int, backend: str) -> float:
         fa.run(sim, main, backend=backend)
         elapsed = time.perf_counter() - t0
     return elapsed / (tasks * waits) * 1e6
+
+
+def simpy_bench(tasks: int, waits: int) -> float | None:
+    """Microseconds per ``yield env.timeout(1)`` in SimPy (None without simpy)."""
+    try:
+        import simpy
+    except ImportError:
+        return None
+    env = simpy.Environment()
+
+    def sleeper() -> Any:
+        for _ in range(waits):
+            yield env.timeout(1)
+
+    for _ in range(tasks):
+        env.process(sleeper())
+    t0 = time.perf_counter()
+    env.run()
+    return (time.perf_counter() - t0) / (tasks * waits) * 1e6
 
 
 def _fleet(sim: MultiRobotSimulationCore, n: int) -> list[Agent]:
@@ -156,9 +176,20 @@ def main(argv: list[str] | None = None) -> int:
         help="fleet runs per mode, interleaved; the best of each is reported (default 3)",
     )
     args = parser.parse_args(argv)
-    for backend in ("asyncio", "trio"):
-        us = sleep_bench(args.tasks, args.waits, backend)
-        print(f"sleep  {backend:<8} {args.tasks} tasks x {args.waits} waits: {us:6.2f} us per wait")
+    waits: dict[str, float] = {}
+    for _ in range(max(1, args.repeat)):
+        runs = {backend: sleep_bench(args.tasks, args.waits, backend) for backend in BACKENDS}
+        simpy_us = simpy_bench(args.tasks, args.waits)
+        if simpy_us is not None:
+            runs["simpy"] = simpy_us
+        for mode, us in runs.items():
+            waits[mode] = min(us, waits.get(mode, us))
+    for mode, us in waits.items():
+        ratio = f" ({us / waits['simpy']:.2f}x SimPy)" if "simpy" in waits else ""
+        print(
+            f"sleep  {mode:<8} {args.tasks} tasks x {args.waits} waits: {us:6.2f} us per wait"
+            f"{ratio} (best of {args.repeat})"
+        )
     best: dict[str, float] = {}
     for _ in range(max(1, args.repeat)):
         runs = {"queues": fleet_queues(args.agents, args.steps)}
