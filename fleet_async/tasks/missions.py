@@ -210,6 +210,8 @@ class Mission(SimEvent):
                     f"in mission {self.name!r} at sim time {kernel.now * kernel.timestep:.3f} s"
                 )
             self.ok, self.raw_value = False, value
+            if kernel.on_failure is not None:
+                kernel.on_failure(self, value)
         kernel.schedule(self)  # whoever joins it resumes
         self._nursery.child_done(self, error)
 

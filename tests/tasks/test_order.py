@@ -528,3 +528,29 @@ def test_primitives_are_importable_from_the_package():
     ]:
         assert name in fa.__all__ and getattr(fa, name) is not None
     assert ExceptionGroup is not None
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_failed_mission_is_announced_on_the_bus(backend):
+    with _sim() as sim:
+        seen = []
+        sim.events.on(
+            fa.SimEvents.MISSION_FAILED,
+            lambda sim, mission, error: seen.append((sim.step_count, mission, str(error))),
+        )
+
+        async def doomed():
+            await sim.sleep(0.2)
+            raise KeyError("lost pallet")
+
+        async def main():
+            async with sim.task_group() as tg:
+                tg.start_soon(doomed, name="doomed")
+                tg.start_soon(sim.sleep, 5.0)  # cancelled: not a failure
+
+        with pytest.raises(KeyError):
+            fa.run(sim, main, backend=backend)
+        assert seen == [
+            (2, "doomed", "'lost pallet'"),
+            (2, "main", "errors in a sim task group (1 sub-exception)"),  # it fails too
+        ]

@@ -55,6 +55,9 @@ class SimEvents:
     """An action finished successfully; payload ``agent``, ``action``."""
     ACTION_FAILED = "action_failed"
     """An action failed or was cancelled; payload ``agent``, ``action``."""
+    MISSION_FAILED = "mission_failed"
+    """A mission ended with an exception (not a cancellation), emitted by the mission runtime
+    when it ends; payload ``sim``, ``mission`` (its name), ``error``."""
 
     @classmethod
     def all(cls) -> tuple[str, ...]:
