@@ -554,3 +554,52 @@ def test_a_failed_mission_is_announced_on_the_bus(backend):
             (2, "doomed", "'lost pallet'"),
             (2, "main", "errors in a sim task group (1 sub-exception)"),  # it fails too
         ]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_store_serves_one_waiting_get_per_turn_as_simpy(backend):
+    """Two getters wait; two items arrive in one step: the second getter is served when the
+    second put is processed, after what the producer scheduled in between (SimPy's Store)."""
+    import simpy
+
+    def simpy_log():
+        env, log = simpy.Environment(), []
+        store = simpy.Store(env)
+
+        def getter(name):
+            log.append((env.now, name, (yield store.get())))
+
+        def producer():
+            yield env.timeout(1)
+            put = store.put("a")
+            store.put("b")
+            yield put
+            yield env.timeout(0)
+            log.append((env.now, "producer", "after timeout(0)"))
+
+        for process in (getter("g1"), getter("g2"), producer()):
+            env.process(process)
+        env.run()
+        return log
+
+    with _sim(dt=1.0) as sim:
+        log = []
+        store = fa.Store(sim)
+
+        async def getter(name):
+            log.append((sim.now, name, await store.get()))
+
+        async def producer():
+            await sim.timeout(1)
+            put = store.put("a")
+            store.put("b")
+            await put
+            await sim.timeout(0)
+            log.append((sim.now, "producer", "after timeout(0)"))
+
+        async def main():
+            for mission in (getter("g1"), getter("g2"), producer()):
+                sim.spawn(mission)
+
+        fa.run(sim, main, backend=backend)
+        assert log == simpy_log()
