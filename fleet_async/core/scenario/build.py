@@ -55,6 +55,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ACTION_TYPES",
+    "MANAGER_TYPES",
+    "PLUGIN_KEYS",
     "SCENARIO_SECTIONS",
     "SIM_PLUGIN_REGISTRY",
     "ScenarioApi",
@@ -75,11 +77,13 @@ SCENARIO_SECTIONS = (
 SIM_PLUGIN_REGISTRY: dict[str, type[SimPlugin]] = {}
 """``plugins: [{type: ...}]`` names and their SimPlugin classes (:func:`register_sim_plugin`)."""
 
-_MANAGER_TYPES: dict[str, type[SimObjectManager[Any]]] = {
+MANAGER_TYPES: dict[str, type[SimObjectManager[Any]]] = {
     "agent": AgentManager,
     "sim_object": SimObjectManager,
 }
-_PLUGIN_KEYS = ("type", "class", "config", "frequency")
+"""``managers: [{type: ...}]`` names and the manager classes they create."""
+PLUGIN_KEYS = ("type", "class", "config", "frequency")
+"""Keys of a ``plugins:`` entry."""
 _SIMULATION_KEYS = frozenset(f.name for f in dataclasses.fields(SimulationParams))
 
 
@@ -274,11 +278,11 @@ def _create_managers(sim: MultiRobotSimulationCore, entries: list[Any], where: s
         label = f"managers[{i}]"
         options = dict(expect_type(entry, dict, "a mapping", where, label))
         kind = options.pop("type", "agent")
-        if kind not in _MANAGER_TYPES:
+        if kind not in MANAGER_TYPES:
             raise ValueError(
-                f"{where}{label}.type: unknown manager type {kind!r}; valid: {list(_MANAGER_TYPES)}"
+                f"{where}{label}.type: unknown manager type {kind!r}; valid: {list(MANAGER_TYPES)}"
             )
-        cls = _MANAGER_TYPES[kind]
+        cls = MANAGER_TYPES[kind]
         name = expect_type(
             options.pop("name", None), str, "a name (string)", where, f"{label}.name"
         )
@@ -312,7 +316,7 @@ def _plugin_spec(
 ) -> tuple[str, type[SimPlugin], dict[str, Any] | None, float | None]:
     """(label, class, config, frequency) of one ``plugins:`` entry, checked."""
     expect_type(entry, dict, "a mapping", where, label)
-    reject_unknown_keys(list(entry), _PLUGIN_KEYS, where, label)
+    reject_unknown_keys(list(entry), PLUGIN_KEYS, where, label)
     if ("type" in entry) == ("class" in entry):
         raise ValueError(f"{where}{label}: give exactly one of 'type' or 'class', got {entry!r}")
     if "type" in entry:
