@@ -389,6 +389,11 @@ def test_progress_bar_draws_nothing_when_not_a_terminal():
     assert stream.getvalue() == ""
 
 
+def test_format_progress_of_a_run_until_done_has_no_percentage():
+    line = format_progress(26.7, 600.0, 34.12, open_ended=True)
+    assert line == "running until done: 26.7 s (at most 600 s)  RTF 34.1x"
+
+
 def test_format_progress_clamps_and_handles_no_wall_time():
     assert format_progress(0.0, 4.0, float("inf"), width=4) == "[....]  0.0/4.0 s    0%  RTF -"
     assert format_progress(5.0, 4.0, 2.0, width=4) == "[####]  5.0/4.0 s  100%  RTF 2.0x"
@@ -493,3 +498,38 @@ def test_bench_json_matches_the_benchmark_script(script):
 def test_bench_rejects_a_non_positive_size(capsys):
     assert main(["bench", "--n", "0"]) == 2
     assert "fleet-async: error: --n: fleet sizes must be > 0, got 0" in capsys.readouterr().err
+
+
+def test_progress_bar_is_erased_before_other_output_and_comes_back():
+    now = [0.0]
+    stream = FakeTerminal()
+    bar = ProgressBar(600.0, stream, min_interval=0.1, clock=lambda: now[0], open_ended=True)
+    bar.start()
+    out = bar.guard(stream)
+    now[0] = 0.5
+    assert bar.update(5.0)
+    out.write("[t= 5.0 s] picker0 picked tote0\n")
+    now[0] = 1.0
+    bar.finish(10.0)
+    line = "running until done: 5.0 s (at most 600 s)  RTF 10.0x"
+    assert stream.getvalue() == (
+        f"\r{line}\r{' ' * len(line)}\r[t= 5.0 s] picker0 picked tote0\n"
+        "\rrunning until done: 10.0 s (at most 600 s)  RTF 10.0x\n"
+    )
+
+
+def test_native_output_is_hidden_and_python_output_is_not(tmp_path):
+    code = (
+        "import os, sys\n"
+        "from fleet_async.cli.native_output import native_output_hidden\n"
+        "with native_output_hidden() as hidden:\n"
+        "    os.write(1, b'from C on 1\\n'); os.write(2, b'from C on 2\\n')\n"
+        "    print('from Python'); print('to stderr', file=sys.stderr)\n"
+        "print(repr(hidden.text), hidden.line_count)\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == "from Python\n'from C on 1\\nfrom C on 2\\n' 2\n"
+    assert result.stderr == "to stderr\n"

@@ -177,9 +177,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     with native_output_hidden(enabled=not _wants_verbose(arguments)) as hidden:
         code = _main(arguments)
     if code != 0 and hidden.line_count:
+        lines = f"{hidden.line_count} line{'s' if hidden.line_count != 1 else ''}"
         print(
-            f"({hidden.line_count} lines of PyBullet's own output were hidden; add --verbose "
-            "to see them)",
+            f"({lines} of PyBullet's own output hidden; add --verbose to see them)",
             file=sys.stderr,
         )
     return code

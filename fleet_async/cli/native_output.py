@@ -32,8 +32,12 @@ class HiddenOutput:
 
     @property
     def line_count(self) -> int:
-        """Non-empty lines hidden."""
-        return sum(1 for line in self.text.splitlines() if line.strip())
+        """Non-empty lines hidden, not counting PyBullet's build banner."""
+        return sum(
+            1
+            for line in self.text.splitlines()
+            if line.strip() and not line.startswith("pybullet build time:")
+        )
 
 
 def _flush_c_stdio() -> None:

@@ -358,15 +358,24 @@ def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     if args.gui:
         sim.setup_monitor()
     limit = _limit(sim, args.duration)
-    bar = ProgressBar(limit or DEFAULT_MAX_DURATION, sys.stderr) if not args.quiet else None
+    bar = (
+        ProgressBar(limit or DEFAULT_MAX_DURATION, sys.stderr, open_ended=limit is None)
+        if not args.quiet
+        else None
+    )
     StepWatcher(sim, bar)
     start_step, start_time = sim.step_count, sim.sim_time
     outcome: ScenarioOutcome | None = None
     wall0 = time.perf_counter()
-    if bar is not None:
+    streams = sys.stdout, sys.stderr
+    if bar is not None and bar.enabled:
         bar.start()
-    with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C: summarise what ran
-        outcome = run_scenario(sim, limit, backend=args.backend)
+        sys.stdout, sys.stderr = bar.guard(sys.stdout), bar.guard(sys.stderr)
+    try:
+        with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C: summarise what ran
+            outcome = run_scenario(sim, limit, backend=args.backend)
+    finally:
+        sys.stdout, sys.stderr = streams
     wall = time.perf_counter() - wall0
     if bar is not None:
         bar.finish(sim.sim_time - start_time)
