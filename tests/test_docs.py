@@ -86,6 +86,29 @@ def test_every_python_example_parses():
             pytest.fail(f"{block.id}: {exc}")
 
 
+YAML_BLOCKS = [
+    block
+    for page in PAGES
+    for block in fenced_blocks(page)
+    if block.language in ("yaml", "yml") and block.runs
+]
+
+
+@pytest.mark.parametrize("block", YAML_BLOCKS, ids=lambda b: b.id)
+def test_every_yaml_scenario_example_loads(block):
+    """A YAML block is a scenario whose paths are relative to examples/scenarios/."""
+    import yaml
+
+    from fleet_async import MultiRobotSimulationCore
+
+    config = yaml.safe_load(block.code)
+    config.setdefault("simulation", {}).update(gui=False, target_rtf=0)
+    sim = MultiRobotSimulationCore.from_dict(
+        config, source=block.id, base_dir=REPO / "examples" / "scenarios"
+    )
+    sim.close()
+
+
 # ----- the scenario reference -------------------------------------------------------------------
 
 
