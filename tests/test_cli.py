@@ -533,3 +533,22 @@ def test_native_output_is_hidden_and_python_output_is_not(tmp_path):
     assert result.returncode == 0, result.stderr
     assert result.stdout == "from Python\n'from C on 1\\nfrom C on 2\\n' 2\n"
     assert result.stderr == "to stderr\n"
+
+
+def test_the_summary_and_the_monitor_count_objects_alike(scenario, monkeypatch, capsys):
+    from fleet_async.core.view.monitor import SimulationMonitor
+
+    seen = []
+    monkeypatch.setattr(SimulationMonitor, "update", lambda self, *figures: seen.append(figures))
+    monkeypatch.setattr("fleet_async.core.view.monitor.DataMonitor.start", lambda self: None)
+    sim = load_scenario(scenario, gui_on=False, rtf=None)
+    try:
+        sim.params.monitor = True
+        sim.setup_monitor()
+        sim.update_monitor()
+    finally:
+        sim.close()
+    _, _, objects, agents, _ = seen[0]
+    assert main(["run", str(scenario), "--duration", "0.1"]) == 0
+    summary = summary_of(capsys.readouterr().out)
+    assert (summary["objects"], summary["robots"]) == (str(objects), str(agents)) == ("3", "2")

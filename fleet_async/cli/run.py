@@ -382,8 +382,8 @@ def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     saved = sim.stop_recording() if args.record else None
     if not args.quiet:
         summary = RunSummary(
-            robots=len(sim.agents),
-            objects=len(sim.sim_objects),
+            robots=sim.world.agent_count,  # the monitor's figures, so the two agree
+            objects=sim.world.object_count,
             sim_time=sim.sim_time,
             steps=sim.step_count - start_step,
             wall_time=wall,
