@@ -16,7 +16,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import scenario_reference  # noqa: E402
+import scenario_reference
 
 log = logging.getLogger("mkdocs.hooks.fleet_async")
 
@@ -44,7 +44,9 @@ def on_config(config: Any) -> Any:
 def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
     if page.file.src_uri == "scenarios.md":
         if scenario_reference.MARKER not in markdown:
-            log.warning("scenarios.md has no %s marker for the reference", scenario_reference.MARKER)
+            log.warning(
+                "scenarios.md has no %s marker for the reference", scenario_reference.MARKER
+            )
             return markdown
         return markdown.replace(scenario_reference.MARKER, scenario_reference.render())
     return markdown

@@ -62,8 +62,7 @@ ENTITY_TEXT = {
     "manager": "Name of a manager from `managers:` to add the entities to.",
     "batch_controller": '`"batch_omni"`, `"batch_differential"` or a dotted path: the '
     "entities go to a fresh AgentManager that moves them in one vectorised controller.",
-    "actions": "Agents only: a list of actions queued in order when the agent spawns "
-    "(below).",
+    "actions": "Agents only: a list of actions queued in order when the agent spawns (below).",
     "pose": "`[x, y, z]` (with `yaw`), or `{position, orientation | yaw | rpy}`; instead of "
     "`initial_pose`.",
     "yaw": "Heading in radians, with a `pose: [x, y, z]` or a `grid`.",
@@ -155,9 +154,7 @@ def _indent(line: str) -> int:
 
 
 def _show(value: Any) -> str:
-    if isinstance(value, str) and hasattr(value, "value"):  # a str Enum
-        value = value.value
-    elif hasattr(value, "value") and hasattr(value, "name"):
+    if hasattr(value, "value") and hasattr(value, "name"):  # an Enum member: its YAML value
         value = value.value
     return "`" + repr(value).replace("|", "\\|") + "`"
 
@@ -190,7 +187,10 @@ def signature_keys(function: Callable[..., Any], skip: Iterable[str] = ()) -> li
     target = function.__init__ if inspect.isclass(function) else function  # type: ignore[misc]
     keys = []
     for name, parameter in inspect.signature(target).parameters.items():
-        if name in ("self", *skip) or parameter.kind in (parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD):
+        if name in ("self", *skip) or parameter.kind in (
+            parameter.VAR_POSITIONAL,
+            parameter.VAR_KEYWORD,
+        ):
             continue
         empty = parameter.default is inspect.Parameter.empty
         default = "required" if empty else _show(parameter.default)
@@ -226,9 +226,9 @@ def sections() -> list[tuple[str, str, list[Key]]]:
         ("simulation", "`SimulationParams`.", dataclass_keys(SimulationParams)),
         (
             "world",
-            "One source key (the first present of " + ", ".join(
-                f"`{k}`" for k in world_config.SOURCE_KEYS
-            ) + ") and options. Relative paths are taken from the scenario file's folder.",
+            "One source key (the first present of "
+            + ", ".join(f"`{k}`" for k in world_config.SOURCE_KEYS)
+            + ") and options. Relative paths are taken from the scenario file's folder.",
             text_keys(WORLD_TEXT, (*world_config.SOURCE_KEYS, *world_config.OPTION_KEYS)),
         ),
     ]
@@ -308,7 +308,7 @@ def sections() -> list[tuple[str, str, list[Key]]]:
         ("plugins", "Simulation plugins.", text_keys(PLUGIN_TEXT, build.PLUGIN_KEYS)),
         (
             "missions",
-            "Each entry is `\"module:function\"` or a mapping; the function is called as "
+            'Each entry is `"module:function"` or a mapping; the function is called as '
             "`function(sim, *args, **kwargs)` by `fleet-async run` / `fleet_async.run_scenario`.",
             text_keys(MISSION_TEXT, missions.MISSION_KEYS),
         ),
