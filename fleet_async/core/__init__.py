@@ -59,7 +59,7 @@ from fleet_async.core.bodies.models import (
     remove_model_search_path,
     resolve_model,
 )
-from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.bodies.sim_object import ObjectRemovedError, SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
@@ -119,6 +119,7 @@ __all__ = [
     "MovementDirection",
     "MultiRobotSimulationCore",
     "NamedLazyLogger",
+    "ObjectRemovedError",
     "OmniController",
     "Path",
     "PatrolController",

@@ -131,6 +131,7 @@ async def test_wait_and_charge(fleet_sim):
     start = fleet_sim.sim_time
     action = await agent.wait(1.2)
     assert isinstance(action, WaitAction) and fleet_sim.sim_time - start == pytest.approx(1.2)
+    agent.add_plugin(fa.BatteryPlugin(agent, {"initial_soc": 0.5}))
     await agent.charge(0.5)
     assert not agent.is_charging
 

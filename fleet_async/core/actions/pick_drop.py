@@ -50,7 +50,21 @@ class _ApproachAction(Action):
     """Shared machinery of pick and drop: a queue of move / act stages.
 
     Subclasses are dataclasses that declare the fields (in the reference API's order) and set
-    the class variables below; this class holds only behaviour.
+    the class variables below; this class holds only behaviour. Fields both actions have:
+
+    Args:
+        use_approach: Drive to the approach pose first.
+        approach_pose: The approach pose; None computes it ``approach_offset`` short.
+        approach_offset: m short of the target where the approach pose is.
+        joint_targets: Arm: joint positions to reach with (a list, or {joint name: position}).
+        joint_tolerance: Arm: rad (or m) within which a joint has arrived.
+        joint_max_force: Arm: N (or N m) of the joint motors with physics.
+        ee_target_position: Arm: [x, y, z] for the end effector, reached through IK.
+        ee_target_orientation: Arm: [qx, qy, qz, qw] for the end effector, or None.
+        ee_end_effector_link: Arm: link index or name of the end effector (None: found).
+        ee_tolerance: Arm: m within which the end effector has arrived.
+        continue_on_ik_failure: Go on with the best IK solution when the target is out of
+            reach (else the action fails).
     """
 
     _phases: ClassVar[type[Enum]] = PickPhase
@@ -257,7 +271,6 @@ class PickAction(_ApproachAction):
             ``search_radius`` of this [x, y, z] (XY distance when ``use_2d_search``).
         search_radius: m.
         use_2d_search: Ignore height when searching.
-        use_approach / approach_pose / approach_offset: The approach stage (see module doc).
         pick_offset: m from the object where the robot stops to pick.
         move_skip_threshold: m; shorter sub-moves are skipped.
         attach_link: Robot link index or name (-1 / "base_link": the base).
@@ -365,7 +378,6 @@ class DropAction(_ApproachAction):
 
     Args:
         drop_pose: Where the object goes (the robot drives there, ``drop_offset`` short).
-        use_approach / approach_pose / approach_offset: The approach stage.
         drop_offset: m from ``drop_pose`` where the robot stops.
         move_skip_threshold: m; shorter sub-moves are skipped.
         place_gently: Place exactly at ``drop_pose``; else release ``drop_height`` above it.

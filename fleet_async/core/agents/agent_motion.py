@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import logging
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -56,6 +56,7 @@ class AgentMotionApi:
 
     # Provided by Agent / SimObject.
     sim_core: MultiRobotSimulationCore | None
+    check_not_removed: Callable[[str], None]  # SimObject's: raises once the agent left its sim
     use_fixed_base: bool
     motion_result: bool | None
     path_visualize: bool
@@ -229,6 +230,7 @@ class AgentMotionApi:
         return None
 
     def _base(self, what: str) -> KinematicController | None:
+        self.check_not_removed(what)
         if self.use_fixed_base:
             logger.warning("%s ignored: %r has a fixed base", what, self)
             return None

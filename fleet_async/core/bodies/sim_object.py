@@ -8,7 +8,7 @@ talks to PyBullet client 0 directly, until ``sim.add_object`` adopts it.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import numpy as np
 import pybullet as p
@@ -17,6 +17,7 @@ from fleet_async.core.base.events import EventBus
 from fleet_async.core.base.logging_utils import NamedLazyLogger
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.base.types import CollisionMode, coerce_enum
+from fleet_async.core.bodies.removal import ObjectRemovedError, RemovedState, removed_message
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.bodies.spawning import (
     create_bodies,
@@ -33,7 +34,7 @@ from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["ShapeParams", "SimObject", "SimObjectSpawnParams"]
+__all__ = ["ObjectRemovedError", "ShapeParams", "SimObject", "SimObjectSpawnParams"]
 
 
 class SimObject:
@@ -92,6 +93,7 @@ class SimObject:
         self._callbacks = PeriodicSchedule()
         self._log = NamedLazyLogger(__name__)
         self._row = -1  # no row until bound to a simulation or given a standalone store
+        self._removed: str | None = None  # why using the object fails once it left its sim
         if sim_core is not None:
             self.mass = float(mass) if mass is not None else sim_core.body_mass(self.body_id)
             if register:  # subclasses that finish their own setup first pass False and add later
@@ -129,14 +131,16 @@ class SimObject:
         """Called by the simulation just before the object leaves it (subclass hook)."""
 
     def unbind(self) -> None:
-        """Leave the simulation, keeping the last pose in a private row."""
-        pos, orn = self._store.position[self._row].copy(), self._store.orientation[self._row].copy()
-        self._store = KinematicState(1)
-        self._row = self._store.allocate(
-            -1, self.body_id, pos, orn, collision_code=COLLISION_CODES[self._collision_mode.value]
-        )
+        """Leave the simulation; from now on using the object raises ObjectRemovedError."""
+        self._removed = removed_message(self, self.sim_core)
+        self._store = cast("KinematicState", RemovedState(self._removed))
+        self._row = self.object_id = -1
         self.sim_core = None
-        self.object_id = -1
+
+    def check_not_removed(self, what: str) -> None:
+        """Raise ObjectRemovedError (naming the object and ``what``) if it left its sim."""
+        if self._removed is not None:
+            raise ObjectRemovedError(f"{what}: {self._removed}")
 
     @property
     def state_row(self) -> int:
@@ -466,6 +470,7 @@ class SimObject:
     # ----- helpers ------------------------------------------------------------------------
 
     def _require_sim(self, what: str) -> MultiRobotSimulationCore:
+        self.check_not_removed(what)
         if self.sim_core is None:
             raise ValueError(f"{what}: {self!r} is not part of a simulation")
         return self.sim_core

@@ -39,7 +39,7 @@ from fleet_async.core.world.shapes import ShapeParams
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["ACTION_TYPES", "spawn_entities"]
+__all__ = ["ACTION_TYPES", "SCENARIO_ENTITY_KEYS", "spawn_entities"]
 
 ACTION_TYPES: dict[str, type[Action]] = {
     "move": MoveAction,
@@ -52,7 +52,7 @@ ACTION_TYPES: dict[str, type[Action]] = {
 """``actions: [{type: ...}]`` names and the Action dataclasses they build (add your own)."""
 
 # Keys of an entity mapping that the scenario handles itself; the rest go to the class.
-_SCENARIO_ENTITY_KEYS = ("type", "grid", "manager", "batch_controller", "actions")
+SCENARIO_ENTITY_KEYS = ("type", "grid", "manager", "batch_controller", "actions")
 # Classes whose spawn params are known, so their entries are checked before anything spawns
 # and their grids take the bulk spawn path. Other classes spawn one by one via ``from_dict``.
 _KNOWN_PARAMS: dict[type[SimObject], type[SimObjectSpawnParams]] = {
@@ -118,10 +118,10 @@ def _plan_entity(
     type_name = config.pop("type", "agent")
     with config_context(where, f"{label}.type"):
         cls = get_entity_class(type_name)
-    scenario = {key: config.pop(key) for key in _SCENARIO_ENTITY_KEYS[1:] if key in config}
+    scenario = {key: config.pop(key) for key in SCENARIO_ENTITY_KEYS[1:] if key in config}
     params_cls = _KNOWN_PARAMS.get(cls)
     if params_cls is not None:
-        valid = [*params_cls.field_names(), "pose", "yaw", *_SCENARIO_ENTITY_KEYS]
+        valid = [*params_cls.field_names(), "pose", "yaw", *SCENARIO_ENTITY_KEYS]
         reject_unknown_keys(list(config), valid, where, label)
     is_agent = issubclass(cls, Agent)
     for key in ("batch_controller", "actions"):
