@@ -165,7 +165,12 @@ class Runtime:
         return CancelScope(self.kernel, step, shield, fail)
 
     def wait_action(self, agent: Any, action: Any) -> ActionWait:
-        """An event for a queued action (see :class:`~fleet_async.tasks.waits.ActionWait`)."""
+        """The event for a queued action (see :class:`~fleet_async.tasks.waits.ActionWait`);
+        asking twice for the same pending action gives the same event, which every waiter
+        shares."""
+        existing = self.action_waits.get(id(action))
+        if existing is not None and existing.action is action:
+            return existing
         return ActionWait(self, agent, action)
 
     def wait_until(self, predicate: Callable[[], bool]) -> PredicateWait:

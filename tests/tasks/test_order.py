@@ -603,3 +603,20 @@ def test_a_store_serves_one_waiting_get_per_turn_as_simpy(backend):
 
         fa.run(sim, main, backend=backend)
         assert log == simpy_log()
+
+
+async def test_two_missions_can_wait_on_one_action(fleet_sim):
+    robot = _robot(fleet_sim)
+    first = robot.wait(1.0)
+    second = fleet_sim.mission_runtime.wait_action(robot, first.action)
+    assert second is first
+    ended = []
+
+    async def watcher():
+        await second
+        ended.append(fleet_sim.step_count)
+
+    watching = fleet_sim.spawn(watcher)
+    await first
+    await watching
+    assert ended == [10] and fleet_sim.step_count == 10
