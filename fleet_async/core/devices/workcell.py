@@ -44,6 +44,11 @@ _EPS = 1e-9
 _PAD_COLORS = {"dispenser": [0.2, 0.7, 0.3, 1.0], "ingestor": [0.8, 0.25, 0.2, 1.0]}
 
 
+def _label(obj: Any) -> str:
+    """An object's name, or its repr when it has none (for messages)."""
+    return str(obj.name) if getattr(obj, "name", None) else repr(obj)
+
+
 class WorkcellKind(str, Enum):
     """What a workcell does."""
 
@@ -184,10 +189,10 @@ class IngestAction(_StationAction):
         if self.item is None:
             carried = robot.get_attached_objects()
             if not carried:
-                return f"{robot.name or robot!r} carries nothing to ingest"
+                return f"{_label(robot)} carries nothing to ingest"
             self.item = carried[0]
         if self.item.get_attached_parent() is not robot:
-            return f"{robot.name or robot!r} does not carry {self.item!r}"
+            return f"{_label(robot)} does not carry {self.item!r}"
         robot.detach_object(self.item, drop_pose=station.item_pose())
         return None
 
@@ -274,8 +279,7 @@ class Workcell(Device):
         distance = math.hypot(float(there[0] - here[0]), float(there[1] - here[1]))
         if distance > self.reach + _EPS:
             return (
-                f"{robot.name or robot!r} is {distance:.2f} m from {self.name or self!r} "
-                f"(reach {self.reach:g} m)"
+                f"{_label(robot)} is {distance:.2f} m from {_label(self)} (reach {self.reach:g} m)"
             )
         return None
 
@@ -312,10 +316,10 @@ class Workcell(Device):
 
     def _dispense_action(self, robot: Agent) -> DispenseAction:
         if self.kind is not WorkcellKind.DISPENSER:
-            raise ValueError(f"{self.name or self!r} is an ingestor; it cannot dispense")
+            raise ValueError(f"{_label(self)} is an ingestor; it cannot dispense")
         return DispenseAction(robot=robot)
 
     def _ingest_action(self, robot: Agent, item: SimObject | None) -> IngestAction:
         if self.kind is not WorkcellKind.INGESTOR:
-            raise ValueError(f"{self.name or self!r} is a dispenser; it cannot ingest")
+            raise ValueError(f"{_label(self)} is a dispenser; it cannot ingest")
         return IngestAction(robot=robot, item=item)
