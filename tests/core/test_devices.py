@@ -4,6 +4,7 @@ request policies, passengers, collisions, scenarios and errors."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +26,7 @@ from fleet_async import (
     SimEvents,
     SimObject,
     Workcell,
+    WorldLoadError,
 )
 from fleet_async.core.devices import WorkcellPlugin
 
@@ -346,3 +348,36 @@ def test_a_bad_device_entry_names_the_entry_the_key_and_the_file(tmp_path):
     path.write_text(SCENARIO.replace("open_time: 1.5", "open_tme: 1.5"))
     with pytest.raises(ValueError, match=r"bad.yaml.*entities\[0\].*'open_tme'.*'open_time'"):
         MultiRobotSimulationCore.from_yaml(path)
+
+
+# ----- Gazebo worlds (the Open-RMF convention) --------------------------------------------------
+
+
+WORLDS = Path(__file__).resolve().parent.parent / "data" / "worlds"
+
+
+def test_open_rmf_doors_and_lifts_in_a_world_become_devices(sim):
+    loaded = sim.load_world({"world_file": str(WORLDS / "rmf_devices.world")})
+    by_name = {obj.name: obj for obj in loaded}
+    assert sorted(by_name) == ["Lift1", "lobby_door", "office_door", "wall"]
+    assert type(by_name["wall"]) is SimObject
+    lobby, office, lift1 = by_name["lobby_door"], by_name["office_door"], by_name["Lift1"]
+    assert isinstance(lobby, Door) and isinstance(office, Door) and isinstance(lift1, Elevator)
+    assert lobby.door_type.value == "sliding" and lobby.open_time == pytest.approx(1.19 / 0.4)
+    assert lobby.get_pose().position.tolist() == pytest.approx([2.0, 0.0, 0.0])
+    assert office.door_type.value == "hinged" and office.open_time == pytest.approx(1.57 / 0.5)
+    assert lift1.floors == {"L1": 0.0, "L2": 3.0} and lift1.speed == 1.5
+    assert lift1.get_pose().position.tolist() == pytest.approx([8.0, 0.0, 0.0])
+
+
+def test_an_unreadable_rmf_door_is_a_named_load_failure(sim, tmp_path):
+    text = (
+        (WORLDS / "rmf_devices.world").read_text().replace('type="SwingDoor"', 'type="Revolving"')
+    )
+    world = tmp_path / "bad.world"
+    world.write_text(text)
+    with pytest.raises(
+        WorldLoadError, match=r"'office_door': model 'office_door': door type 'Revolving'"
+    ):
+        sim.load_world({"world_file": str(world)})
+    assert sim.sim_objects == []

@@ -7,7 +7,9 @@ anything failed and ``on_error`` is ``"raise"`` (the default), the bodies alread
 removed and :class:`WorldLoadError` lists every failure; nothing half-loaded remains and no
 spawn event was emitted. With ``on_error: "warn"`` each failure is logged and the rest loads.
 
-The ``world_config`` mapping is checked in ``world_config.py``; file-format work (``model://``
+Inline models that Open-RMF's building map generator marks as doors and lifts become Door and
+Elevator devices instead of static bodies (``devices/rmf_world.py``). The ``world_config``
+mapping is checked in ``world_config.py``; file-format work (``model://``
 lookup, SDF rewriting for PyBullet) lives in ``gazebo_world.py`` and ``sdf_rewriter.py``.
 """
 
@@ -26,6 +28,8 @@ import pybullet as p
 
 from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.devices import Door, DoorParams, Elevator
+from fleet_async.core.devices.rmf_world import rmf_device_params
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.scenario.gazebo_world import (
     AssetProblem,
@@ -123,6 +127,7 @@ class BodyLoader:
         self.skipped: set[str] = set()
         self.bodies: list[LoadedBody] = []
         self.failures: list[WorldLoadFailure] = []
+        self.devices: list[Any] = []  # DoorParams / ElevatorParams of Open-RMF models
 
     def fail(self, name: str, problem: AssetProblem) -> None:
         """Record that ``name`` could not be loaded."""
@@ -255,7 +260,15 @@ def _load_world_file(loader: BodyLoader, world: FsPath) -> None:
         if loader.skips(entry.name, entry.model_name):
             continue
         try:
+            device = None
+            if entry.element is not None:
+                device = rmf_device_params(entry.element, f"model {entry.name!r}")
+            if device is not None:
+                loader.devices.append(device)
+                continue
             _load_entry(loader, entry, world, version)
+        except ValueError as exc:
+            loader.fail(entry.name, AssetProblem(str(exc), [world]))
         except AssetProblem as problem:
             loader.fail(entry.name, problem)
 
@@ -323,8 +336,9 @@ class WorldLoadingApi:
                 the working directory); scenario files pass their own directory.
 
         Returns:
-            The new objects in load order, named after their include ``<name>`` (else the
-            URI's model name), SDF model name or mesh file stem. Their ``user_data`` holds
+            The new objects in load order (Open-RMF doors and lifts last, as devices), named
+            after their include ``<name>`` (else the URI's model name), SDF model name or mesh
+            file stem. Their ``user_data`` holds
             ``world_source`` (the source path), ``model_file`` (the SDF or mesh file the body
             came from) and, for includes, ``uri``.
 
@@ -346,7 +360,16 @@ class WorldLoadingApi:
         unmatched = sorted(opts.skip - loader.skipped)
         if unmatched:
             logger.warning("load_world(%s): skip_models %s matched nothing", opts.source, unmatched)
-        return _wrap(sim, loader)
+        objects = _wrap(sim, loader)
+        try:
+            for params in loader.devices:
+                device_class = Door if isinstance(params, DoorParams) else Elevator
+                objects.append(device_class.from_params(params, sim))
+        except BaseException:
+            for obj in reversed(objects):
+                sim.remove_object(obj)
+            raise
+        return objects
 
 
 def _load_bodies(sim: MultiRobotSimulationCore, opts: WorldOptions) -> BodyLoader:
