@@ -3,17 +3,18 @@
 Each acts for the tree's agent, or for ``robot`` (an agent's name, or an agent on the
 blackboard) when given. Objects (``door``, ``elevator``, ``station``, ``object``) are sim
 object names or blackboard entries holding the objects. Poses are ``x;y;z`` or ``x;y;z;yaw``
-literals, or blackboard entries holding a Pose or a list of numbers.
+literals, or blackboard entries holding a Pose or a list of numbers; a path (``MoveTo`` and
+``PassDoor`` goals) is one pose or several separated by ``|``, or a list of Poses.
 
 ======================  =================================================================
 Node                    Does (and awaits)
 ======================  =================================================================
-MoveTo goal             ``robot.move(goal)``
+MoveTo goal             ``robot.move(goal)`` (a pose or a path)
 Pick object             ``robot.pick(object)``
 Drop pose               ``robot.drop(pose)``
 Wait seconds            ``robot.wait(seconds)``
 OpenDoor / CloseDoor    ``door.open()`` / ``door.close()``
-PassDoor door goal      ``door.pass_through(robot, goal)`` (doorway shared as a Resource)
+PassDoor door goal      ``door.pass_through(robot, goal)`` (goal: a path through the door)
 CallElevator            ``elevator.go_to(floor)``
 RideElevator            ``elevator.ride(robot, floor, exit_pose=exit)`` (lift as a Resource)
 Dispense station item   ``station.dispense(robot)``; the new item goes to output ``item``
@@ -103,7 +104,7 @@ def _action(name: str, fn: Any, *ports: Port, description: str = "") -> NodeMode
 FLEET_MODELS: dict[str, NodeModel] = {
     m.name: m
     for m in (
-        _action("MoveTo", _move_to, InputPort("goal", "pose"), _ROBOT, description="drive to goal"),
+        _action("MoveTo", _move_to, InputPort("goal", "path"), _ROBOT, description="drive to goal"),
         _action("Pick", _pick, InputPort("object", "object"), _ROBOT, description="pick object"),
         _action("Drop", _drop, InputPort("pose", "pose"), _ROBOT, description="drop at pose"),
         _action("Wait", _wait, InputPort("seconds", float), _ROBOT, description="stand still"),
@@ -113,7 +114,7 @@ FLEET_MODELS: dict[str, NodeModel] = {
             "PassDoor",
             _pass_door,
             InputPort("door", "object"),
-            InputPort("goal", "pose"),
+            InputPort("goal", "path"),
             _ROBOT,
             description="take the doorway, open, drive through, close behind",
         ),

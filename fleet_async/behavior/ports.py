@@ -49,8 +49,9 @@ class Port:
         name: Attribute name in the XML.
         direction: "input" or "output".
         kind: How a literal is read: ``str``, ``int``, ``float``, ``bool``, ``"pose"``
-            (``x;y;z`` or ``x;y;z;yaw``), ``"object"`` (a sim object's name or a blackboard
-            object), ``"any"``, or a callable ``str -> value``.
+            (``x;y;z`` or ``x;y;z;yaw``), ``"path"`` (poses separated by ``|``), ``"object"``
+            (a sim object's name or a blackboard object), ``"any"``, or a callable
+            ``str -> value``.
         default: Value when the attribute is absent (``REQUIRED``: it must be given). For an
             output port, the blackboard key written when the attribute is absent (or None).
         description: For documentation.
@@ -121,6 +122,21 @@ def _pose(value: Any) -> Pose:
     raise ValueError(f"expected 'x;y;z' or 'x;y;z;yaw', got {value!r}")
 
 
+def _path(value: Any) -> list[Pose]:
+    if isinstance(value, Pose):
+        return [value]
+    if isinstance(value, str):
+        return [_pose(part) for part in value.split("|") if part.strip()] or _path_error(value)
+    items = list(value)
+    if items and all(isinstance(v, (int, float)) for v in items):
+        return [_pose(items)]
+    return [_pose(item) for item in items] or _path_error(value)
+
+
+def _path_error(value: Any) -> list[Pose]:
+    raise ValueError(f"expected poses 'x;y;z | x;y;z | ...', got {value!r}")
+
+
 def _bool(value: Any) -> bool:
     if isinstance(value, bool):
         return value
@@ -161,6 +177,7 @@ _CONVERTERS: dict[Any, Callable[[Any], Any]] = {
     float: _float,
     bool: _bool,
     "pose": _pose,
+    "path": _path,
     "any": lambda v: v,
     "object": lambda v: v,  # names are resolved against the simulation when the node runs
 }
@@ -177,7 +194,7 @@ def convert_literal(kind: Any, value: Any) -> Any:
         if not callable(kind):
             raise TypeError(f"port kind {kind!r} is neither a known kind nor callable")
         converter = kind
-    if kind in (int, float, bool, "pose") or isinstance(value, str):
+    if kind in (int, float, bool, "pose", "path") or isinstance(value, str):
         return converter(value)
     return value
 
