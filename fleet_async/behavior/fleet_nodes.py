@@ -9,7 +9,8 @@ literals, or blackboard entries holding a Pose or a list of numbers; a path (``M
 ======================  =================================================================
 Node                    Does (and awaits)
 ======================  =================================================================
-MoveTo goal             ``robot.move(goal)`` (a pose or a path)
+MoveTo goal             ``robot.move(goal)`` (a pose or a path); NavigateTo is the same
+WaitRandom              ``sim.sleep(uniform(min_seconds, max_seconds))`` (the tree's rng)
 Pick object             ``robot.pick(object)``
 Drop pose               ``robot.drop(pose)``
 Wait seconds            ``robot.wait(seconds)``
@@ -44,6 +45,12 @@ def _robot(ctx: NodeContext, robot: Any) -> Agent:
 
 async def _move_to(ctx: NodeContext, goal: Any, robot: Any) -> None:
     await _robot(ctx, robot).move(goal)
+
+
+async def _wait_random(ctx: NodeContext, min_seconds: float, max_seconds: float) -> None:
+    if max_seconds < min_seconds:
+        raise ctx.error(f"max_seconds ({max_seconds:g}) < min_seconds ({min_seconds:g})")
+    await ctx.sim.sleep(float(ctx.rng.uniform(min_seconds, max_seconds)))
 
 
 async def _pick(ctx: NodeContext, object: Any, robot: Any) -> None:  # port name
@@ -105,6 +112,20 @@ FLEET_MODELS: dict[str, NodeModel] = {
     m.name: m
     for m in (
         _action("MoveTo", _move_to, InputPort("goal", "path"), _ROBOT, description="drive to goal"),
+        _action(
+            "NavigateTo",
+            _move_to,
+            InputPort("goal", "path"),
+            _ROBOT,
+            description="drive to goal (the reference runner's name for MoveTo)",
+        ),
+        _action(
+            "WaitRandom",
+            _wait_random,
+            InputPort("min_seconds", float),
+            InputPort("max_seconds", float),
+            description="sleep a random time in the range",
+        ),
         _action("Pick", _pick, InputPort("object", "object"), _ROBOT, description="pick object"),
         _action("Drop", _drop, InputPort("pose", "pose"), _ROBOT, description="drop at pose"),
         _action("Wait", _wait, InputPort("seconds", float), _ROBOT, description="stand still"),

@@ -63,6 +63,11 @@ class NodeContext:
         return self._scope.blackboard
 
     @property
+    def rng(self) -> Any:
+        """The tree's random generator (deterministic: from the simulation's seed)."""
+        return self._scope.tree.rng
+
+    @property
     def node(self) -> TreeNode:
         """The node (``label``, ``source``, ``line``)."""
         return self._node

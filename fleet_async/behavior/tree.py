@@ -82,6 +82,15 @@ class BehaviorTree:
         self.blackboard = blackboard
         self.status: NodeStatus | None = None
         self._listeners: list[Listener] = []
+        self._rng: Any = None
+
+    @property
+    def rng(self) -> Any:
+        """The tree's numpy Generator: made from ``sim.mission_rng()`` by the mission that
+        first asks (so seeded by the simulation's seed and that mission's place)."""
+        if self._rng is None:
+            self._rng = self.sim.mission_rng()
+        return self._rng
 
     def add_listener(self, listener: Listener) -> None:
         """Call ``listener(sim_time, node, status)`` on every status change."""

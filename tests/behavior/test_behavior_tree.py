@@ -309,3 +309,22 @@ def test_registering_nodes_checks_names_and_functions():
         factory.register_action("Sync", lambda ctx: True)
     with pytest.raises(TypeError, match="must be a plain function"):
         factory.register_condition("Async", act)
+
+
+async def test_the_reference_runners_node_names_work_and_random_waits_are_seeded(fleet_sim):
+    robot = bot(fleet_sim)
+    xml = doc(
+        '<Repeat num_cycles="3"><Sequence><NavigateTo goal="{goal}"/>'
+        '<WaitRandom min_seconds="1.0" max_seconds="2.0"/></Sequence></Repeat>'
+    )
+    tree = BehaviorTreeFactory().create_tree_from_text(
+        xml, agent=robot, blackboard={"goal": (1.0, 0.0, 0.1)}
+    )
+    waits: list[float] = []
+    tree.add_listener(
+        lambda t, node, status: waits.append(t) if node.label == "WaitRandom" else None
+    )
+    assert await tree.run() is NodeStatus.SUCCESS
+    spans = [round(end - start, 1) for start, end in zip(waits[::2], waits[1::2], strict=True)]
+    assert len(set(spans)) > 1 and all(1.0 <= s <= 2.0 for s in spans)
+    assert spans == [1.1, 1.1, 1.2]  # the same on every run and backend (seed 0)
