@@ -221,6 +221,15 @@ def test_a_cancelled_trip_stops_between_floors_and_releases_its_passengers(sim):
     assert not bot.is_attached() and bot.get_pose().z == pytest.approx(1.6)
 
 
+def test_passengers_are_found_in_the_platforms_own_frame(sim):
+    elevator = lift(sim, yaw=math.pi / 2, platform_size=[1.0, 3.0])
+    aboard = robot(sim, 6.2, 0.0, name="aboard")  # 1.2 m along the platform's long side
+    beside = robot(sim, 5.0, 0.8, name="beside")  # 0.8 m across its short side: off it
+    high = robot(sim, 5.0, 0.0, z=2.7, name="high")  # above the cabin height
+    assert elevator.objects_on_platform() == [aboard]
+    assert not beside.is_attached() and not high.is_attached()
+
+
 def test_elevator_geometry_helpers(sim):
     elevator = lift(sim, initial_floor="L2", landings={"L3": [1.6, 0.0]})
     assert elevator.height == 3.0 and elevator.current_floor == "L2"
@@ -356,10 +365,17 @@ def test_a_bad_device_entry_names_the_entry_the_key_and_the_file(tmp_path):
 WORLDS = Path(__file__).resolve().parent.parent / "data" / "worlds"
 
 
-def test_open_rmf_doors_and_lifts_in_a_world_become_devices(sim):
+def test_open_rmf_doors_lifts_and_workcells_in_a_world_become_devices(sim):
     loaded = sim.load_world({"world_file": str(WORLDS / "rmf_devices.world")})
     by_name = {obj.name: obj for obj in loaded}
-    assert sorted(by_name) == ["Lift1", "lobby_door", "office_door", "wall"]
+    assert list(by_name) == [
+        "wall",
+        "lobby_door",
+        "office_door",
+        "Lift1",
+        "coke_dispenser",
+        "coke_ingestor",
+    ]
     assert type(by_name["wall"]) is SimObject
     lobby, office, lift1 = by_name["lobby_door"], by_name["office_door"], by_name["Lift1"]
     assert isinstance(lobby, Door) and isinstance(office, Door) and isinstance(lift1, Elevator)
@@ -368,6 +384,10 @@ def test_open_rmf_doors_and_lifts_in_a_world_become_devices(sim):
     assert office.door_type.value == "hinged" and office.open_time == pytest.approx(1.57 / 0.5)
     assert lift1.floors == {"L1": 0.0, "L2": 3.0} and lift1.speed == 1.5
     assert lift1.get_pose().position.tolist() == pytest.approx([8.0, 0.0, 0.0])
+    dispenser, ingestor = by_name["coke_dispenser"], by_name["coke_ingestor"]
+    assert isinstance(dispenser, Workcell) and dispenser.kind.value == "dispenser"
+    assert isinstance(ingestor, Workcell) and ingestor.kind.value == "ingestor"
+    assert ingestor.get_pose().position.tolist() == pytest.approx([7.0, 2.0, 3.0])
 
 
 def test_an_unreadable_rmf_door_is_a_named_load_failure(sim, tmp_path):

@@ -25,6 +25,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
+import numpy as np
+
 from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.types import ActionStatus, CollisionMode
@@ -37,6 +39,7 @@ from fleet_async.core.devices.elevator_params import (
 )
 from fleet_async.core.devices.motion import DeviceAction
 from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.geometry.quaternions import quat_to_rot_matrix
 from fleet_async.core.missions.hooks import mission_hook
 from fleet_async.core.world.shapes import ShapeParams
 
@@ -306,25 +309,27 @@ class Elevator(Device):
         """Objects standing on the platform: base within its footprint, between its top and
         ``cabin_height`` above, not carried by anything, not static scenery, not devices."""
         sim = self._require_sim("objects_on_platform")
-        frame = self.get_pose().inverse()
+        objects = [obj for obj in sim.sim_objects if not isinstance(obj, Device)]
+        if not objects:
+            return []
+        # One numpy pass over every object's base; the other checks only for those inside.
+        positions, _ = sim.get_poses([obj.object_id for obj in objects])
+        here = self.get_pose()
+        rotation = np.asarray(quat_to_rot_matrix(here.orientation)).reshape(3, 3)
+        rel = (positions - here.position) @ rotation  # rows R^T v: in the platform frame
         sx, sy = self._params.platform_size
-        riders = []
-        for obj in sim.sim_objects:
-            if (
-                obj is self
-                or isinstance(obj, Device)
-                or obj.collision_mode is CollisionMode.STATIC
-                or obj.is_attached()
-            ):
-                continue
-            rel = frame.compose(obj.get_pose()).position
-            if (
-                abs(rel[0]) <= sx / 2 + _EPS
-                and abs(rel[1]) <= sy / 2 + _EPS
-                and -0.05 <= rel[2] <= self._params.cabin_height
-            ):
-                riders.append(obj)
-        return riders
+        inside = (
+            (np.abs(rel[:, 0]) <= sx / 2 + _EPS)
+            & (np.abs(rel[:, 1]) <= sy / 2 + _EPS)
+            & (rel[:, 2] >= -0.05)
+            & (rel[:, 2] <= self._params.cabin_height)
+        )
+        return [
+            objects[i]
+            for i in np.flatnonzero(inside).tolist()
+            if objects[i].collision_mode is not CollisionMode.STATIC
+            and not objects[i].is_attached()
+        ]
 
     def _arrive(self) -> None:
         released = self._release()

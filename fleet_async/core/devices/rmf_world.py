@@ -16,6 +16,11 @@ doorway's width is the sum of the leaves' widths, a double door becomes one leaf
 limit), and ``open_time`` is the travel divided by ``v_max_door`` (accelerations ignored). The
 lift's platform is the box of its ``platform`` link's floor, its speed ``v_max_cabin``. Cabin
 doors (models nested in the lift) are not modelled; shaft doors are doors of their own.
+
+Open-RMF's workcells are ``<include>`` entries of the models ``TeleportDispenser`` and
+``TeleportIngestor``, named after the workcell (``coke_dispenser``); they become
+:class:`Workcell` stations of that name at the include's pose, with the default processing
+time.
 """
 
 from __future__ import annotations
@@ -24,11 +29,17 @@ import math
 import xml.etree.ElementTree as ET
 
 from fleet_async.core.agents.agent_params import AgentSpawnParams
-from fleet_async.core.devices.door import DoorParams
+from fleet_async.core.devices.device import Device
+from fleet_async.core.devices.door import Door, DoorParams
+from fleet_async.core.devices.elevator import Elevator
 from fleet_async.core.devices.elevator_params import ElevatorParams
+from fleet_async.core.devices.workcell import Workcell, WorkcellParams
 from fleet_async.core.geometry.pose import Pose
 
-__all__ = ["rmf_device_params"]
+__all__ = ["device_class", "rmf_device_params", "rmf_workcell_params"]
+
+RMF_WORKCELL_MODELS = {"TeleportDispenser": "dispenser", "TeleportIngestor": "ingestor"}
+"""Open-RMF workcell model names and the kind of station each becomes."""
 
 _DOOR_TYPES = {
     "SlidingDoor": "sliding",
@@ -152,3 +163,26 @@ def rmf_device_params(model: ET.Element, where: str) -> AgentSpawnParams | None:
     if lift is not None:
         return _lift(model, lift, where)
     return None
+
+
+def rmf_workcell_params(model_name: str, name: str, pose: Pose) -> WorkcellParams | None:
+    """The WorkcellParams of an Open-RMF ``TeleportDispenser`` / ``TeleportIngestor``
+    include named ``name`` at ``pose``, else None."""
+    kind = RMF_WORKCELL_MODELS.get(model_name)
+    if kind is None:
+        return None
+    return WorkcellParams(
+        name=name,
+        initial_pose=pose,
+        kind=kind,  # type: ignore[arg-type]  # coerced in __post_init__
+        user_data={"rmf_model": model_name},
+    )
+
+
+def device_class(params: AgentSpawnParams) -> type[Device]:
+    """The device class that ``params`` (from this module) build."""
+    if isinstance(params, DoorParams):
+        return Door
+    if isinstance(params, ElevatorParams):
+        return Elevator
+    return Workcell

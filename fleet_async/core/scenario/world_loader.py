@@ -7,8 +7,8 @@ anything failed and ``on_error`` is ``"raise"`` (the default), the bodies alread
 removed and :class:`WorldLoadError` lists every failure; nothing half-loaded remains and no
 spawn event was emitted. With ``on_error: "warn"`` each failure is logged and the rest loads.
 
-Inline models that Open-RMF's building map generator marks as doors and lifts become Door and
-Elevator devices instead of static bodies (``devices/rmf_world.py``). The ``world_config``
+Models that Open-RMF marks as doors, lifts and workcells become Door, Elevator and Workcell
+devices instead of static bodies (``devices/rmf_world.py``). The ``world_config``
 mapping is checked in ``world_config.py``; file-format work (``model://``
 lookup, SDF rewriting for PyBullet) lives in ``gazebo_world.py`` and ``sdf_rewriter.py``.
 """
@@ -28,8 +28,11 @@ import pybullet as p
 
 from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.bodies.sim_object import SimObject
-from fleet_async.core.devices import Door, DoorParams, Elevator
-from fleet_async.core.devices.rmf_world import rmf_device_params
+from fleet_async.core.devices.rmf_world import (
+    device_class,
+    rmf_device_params,
+    rmf_workcell_params,
+)
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.scenario.gazebo_world import (
     AssetProblem,
@@ -127,7 +130,7 @@ class BodyLoader:
         self.skipped: set[str] = set()
         self.bodies: list[LoadedBody] = []
         self.failures: list[WorldLoadFailure] = []
-        self.devices: list[Any] = []  # DoorParams / ElevatorParams of Open-RMF models
+        self.devices: list[Any] = []  # spawn params of Open-RMF doors, lifts and workcells
 
     def fail(self, name: str, problem: AssetProblem) -> None:
         """Record that ``name`` could not be loaded."""
@@ -260,7 +263,7 @@ def _load_world_file(loader: BodyLoader, world: FsPath) -> None:
         if loader.skips(entry.name, entry.model_name):
             continue
         try:
-            device = None
+            device: Any = rmf_workcell_params(entry.model_name, entry.name, entry.pose)
             if entry.element is not None:
                 device = rmf_device_params(entry.element, f"model {entry.name!r}")
             if device is not None:
@@ -336,11 +339,11 @@ class WorldLoadingApi:
                 the working directory); scenario files pass their own directory.
 
         Returns:
-            The new objects in load order (Open-RMF doors and lifts last, as devices), named
-            after their include ``<name>`` (else the URI's model name), SDF model name or mesh
-            file stem. Their ``user_data`` holds
-            ``world_source`` (the source path), ``model_file`` (the SDF or mesh file the body
-            came from) and, for includes, ``uri``.
+            The new objects in load order (Open-RMF doors, lifts and workcells last, as
+            devices), named after their include ``<name>`` (else the URI's model name), SDF
+            model name or mesh file stem. Their ``user_data`` holds ``world_source`` (the
+            source path), ``model_file`` (the SDF or mesh file the body came from) and, for
+            includes, ``uri``.
 
         Raises:
             WorldLoadError: listing every model that failed (name, reason, paths), after
@@ -363,8 +366,7 @@ class WorldLoadingApi:
         objects = _wrap(sim, loader)
         try:
             for params in loader.devices:
-                device_class = Door if isinstance(params, DoorParams) else Elevator
-                objects.append(device_class.from_params(params, sim))
+                objects.append(device_class(params).from_params(params, sim))
         except BaseException:
             for obj in reversed(objects):
                 sim.remove_object(obj)
