@@ -93,8 +93,8 @@ async def ride(
         if start == floor:
             return None
         lift_z = here.z - elevator.floor_height(start)
-        if elevator.current_floor != start or elevator.is_moving or elevator.pending_floors:
-            await elevator.go_to(start)
+        if elevator.is_moving or elevator.pending_floors or not elevator.is_at(start):
+            await elevator.go_to(start)  # call it
         aboard = elevator.platform_pose(start, lift_z)
         aboard.orientation = here.orientation.copy()
         await robot.move(aboard)

@@ -108,6 +108,22 @@ async def test_awaiting_a_trip_takes_height_over_speed(fleet_sim):
     assert elevator.state is ElevatorState.IDLE
 
 
+async def test_a_ride_first_calls_back_a_lift_stopped_between_floors(fleet_sim):
+    elevator = lift(fleet_sim)
+    with fleet_sim.move_on_after(1.0):
+        await elevator.go_to("L2")  # a plain trip stops with the mission that awaited it
+    await fleet_sim.sleep(0.5)
+    assert elevator.height == pytest.approx(1.5) and elevator.state is ElevatorState.IDLE
+    bot = robot(fleet_sim, 3.0, 0.0, "bot")
+    departures = record(fleet_sim, DeviceEvents.ELEVATOR_DEPARTED)
+    await elevator.ride(bot, "L2")
+    assert [(d["target_floor"], d["passengers"]) for d in departures] == [
+        ("L1", ()),
+        ("L2", (bot,)),
+    ]
+    assert bot.get_pose().z == pytest.approx(3.1)
+
+
 async def test_two_robots_ride_the_lift_one_after_the_other(fleet_sim):
     elevator = lift(fleet_sim)
     departures = record(fleet_sim, DeviceEvents.ELEVATOR_DEPARTED)

@@ -180,6 +180,10 @@ class Elevator(Device):
         self._check_floor(floor, "floor_height")
         return self._floors[floor]
 
+    def is_at(self, floor: str) -> bool:
+        """Whether the platform stands at ``floor``'s height (moving or not)."""
+        return abs(self.height - self.floor_height(floor)) <= _EPS
+
     def floor_at(self, z: float) -> str:
         """The highest floor at or below height ``z`` (the lowest floor if none is)."""
         below = [(h, name) for name, h in self._floors.items() if h <= z + _EPS]
@@ -211,7 +215,7 @@ class Elevator(Device):
         self._check_floor(floor_name, "request_floor")
         busy = self._state is ElevatorState.MOVING or bool(self.pending_floors)
         if not busy:
-            if floor_name == self._current:
+            if self.is_at(floor_name):
                 return ElevatorRequestResult.REJECTED
             self.queue_trip(floor_name)
             return ElevatorRequestResult.ACCEPTED
