@@ -25,6 +25,7 @@ from fleet_async import (
     SimPlugin,
 )
 from fleet_async.core.base.config_utils import load_yaml_config
+from fleet_async.core.devices import Device
 from fleet_async.core.managers import sim_object_manager as managers
 from fleet_async.core.scenario import build as scenario
 
@@ -653,6 +654,7 @@ def test_example_scenario_runs_headless(build, path):
     assert failed == []
     standby = sim.get_manager("pickers")  # warehouse.yaml: dispatched by a script, idle here
     idle = set() if standby is None else {a.object_id for a in standby.objects}
+    idle |= {a.object_id for a in sim.agents if isinstance(a, Device)}  # move when asked
     assert sim.agents and all(
         not np.allclose(now, then)
         for agent, now, then in zip(sim.agents, positions(sim.agents), start, strict=True)

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.base.config_utils import load_yaml_config, register_class, resolve_class
 from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.devices import WorkcellPlugin
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.sim_object_manager import (
     SimObjectManager,
@@ -74,7 +75,7 @@ SCENARIO_SECTIONS = (
 )
 """Top-level sections of the nested layout."""
 
-SIM_PLUGIN_REGISTRY: dict[str, type[SimPlugin]] = {}
+SIM_PLUGIN_REGISTRY: dict[str, type[SimPlugin]] = {"workcell": WorkcellPlugin}
 """``plugins: [{type: ...}]`` names and their SimPlugin classes (:func:`register_sim_plugin`)."""
 
 MANAGER_TYPES: dict[str, type[SimObjectManager[Any]]] = {

@@ -23,6 +23,14 @@ from fleet_async.core.base.paths import resolve_data_file
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.devices import (
+    Door,
+    DoorParams,
+    Elevator,
+    ElevatorParams,
+    Workcell,
+    WorkcellParams,
+)
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.geometry.waypoints import Path
@@ -58,6 +66,9 @@ SCENARIO_ENTITY_KEYS = ("type", "grid", "manager", "batch_controller", "actions"
 _KNOWN_PARAMS: dict[type[SimObject], type[SimObjectSpawnParams]] = {
     Agent: AgentSpawnParams,
     SimObject: SimObjectSpawnParams,
+    Door: DoorParams,
+    Elevator: ElevatorParams,
+    Workcell: WorkcellParams,
 }
 
 
