@@ -405,6 +405,18 @@ class KinematicEngine:
         if len(vel_slots):
             self._advance_velocity(vel_slots, dt)
 
+    def advance_slot(self, slot: int, dt: float) -> None:
+        """Move one slot by ``dt`` seconds (an agent advanced on its own, outside a step)."""
+        if slot in self._stopped:
+            self._stopped.remove(slot)
+            if self.mode[slot] == _IDLE:
+                self._store.velocity[self.row[slot]] = 0.0
+                self._store.angular_velocity[self.row[slot]] = 0.0
+        if self.mode[slot] == _POSE:
+            self._advance_pose(np.array([slot]), dt)
+        elif self.mode[slot] == _VELOCITY:
+            self._advance_velocity(np.array([slot]), dt)
+
     def _advance_pose(self, s: np.ndarray, dt: float) -> None:
         store = self._store
         u = self.u[s]
