@@ -46,6 +46,7 @@ FACADES = (
     "config_utils",
     "core_simulation",
     "data_monitor",
+    "events",
     "geometry",
     "logging_utils",
     "sim_object",

@@ -154,8 +154,12 @@ class SimObject:
     def events(self) -> EventBus:
         """Per-entity event bus, created on first access."""
         if self._events is None:
-            self._events = EventBus()
+            self._events = EventBus(on_change=self._on_handlers_changed)
         return self._events
+
+    def _on_handlers_changed(self, event: str) -> None:
+        if self.sim_core is not None:
+            self.sim_core.world.on_entity_handlers_changed(self)
 
     def has_event_bus(self) -> bool:
         """Whether anyone has asked for this object's bus yet (emitters skip it otherwise)."""

@@ -21,8 +21,7 @@ kernel plus scenario loading, world loading, recording, the monitor, the GUI and
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
 
 import numpy as np
@@ -30,14 +29,15 @@ import numpy as np
 from fleet_async.core.agents.fleet import FleetMotion
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.scheduling import PeriodicSchedule
-from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
 from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
+from fleet_async.core.sim.objects_api import ObjectsApi
 from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin, as_plugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
+from fleet_async.core.sim.pybullet_view import PyBulletViewApi
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.state import KinematicState
@@ -62,7 +62,7 @@ class MotionSystem(Protocol):
         """Move every object this system owns by one step of ``dt`` seconds."""
 
 
-class SimulationKernel(SimMissionApi, CollisionApi):
+class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi):
     """The clock, the step loop and what it moves (objects, agents, plugins, managers).
 
     Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
@@ -127,16 +127,6 @@ class SimulationKernel(SimMissionApi, CollisionApi):
         return self._params
 
     @property
-    def client(self) -> int:
-        """PyBullet physics client id, for raw ``pybullet`` calls (``physicsClientId=``)."""
-        return self._backend.client
-
-    @property
-    def is_gui(self) -> bool:
-        """Whether a GUI window is open (False after a headless fallback)."""
-        return self._backend.is_gui
-
-    @property
     def state(self) -> KinematicState:
         """The state store holding every object's row (for vectorised collaborators)."""
         return self._world.store
@@ -172,16 +162,6 @@ class SimulationKernel(SimMissionApi, CollisionApi):
         return self._step_count * self._params.timestep
 
     @property
-    def sim_objects(self) -> list[SimObject]:
-        """Every object, in spawn order."""
-        return self._world.objects
-
-    @property
-    def agents(self) -> list[SimObject]:
-        """Every agent, in spawn order."""
-        return self._world.agents
-
-    @property
     def in_step(self) -> bool:
         """Whether ``step_once`` is running."""
         return self._world.in_step
@@ -200,69 +180,6 @@ class SimulationKernel(SimMissionApi, CollisionApi):
     def plugins(self) -> list[SimPlugin]:
         """Registered plugins, in registration order."""
         return list(self._plugins)
-
-    def body_mass(self, body_id: int, link: int = -1) -> float:
-        """Mass (kg) PyBullet holds for one link of ``body_id`` (-1: the base); 0.0 for no
-        body (-1)."""
-        return self._backend.body_mass(body_id, link) if body_id >= 0 else 0.0
-
-    def get_object_by_id(self, object_id: int) -> SimObject | None:
-        """The object with ``object_id``, or None."""
-        return self._world.get(object_id)
-
-    # ----- objects ------------------------------------------------------------------------
-
-    def add_object(self, obj: SimObject, notify: bool = True) -> None:
-        """Register ``obj`` (``SimObject.__init__`` does this when given ``sim_core``).
-
-        Args:
-            obj: The object.
-            notify: Emit the spawn events now (else ``sim.world.announce(obj)`` does later).
-
-        Raises:
-            ValueError: if ``obj`` already belongs to this or another simulation.
-        """
-        self._world.add(obj, notify)
-
-    def remove_object(self, obj: SimObject) -> None:
-        """Remove ``obj`` from the simulation, its managers and PyBullet.
-
-        Objects it carried are detached where they are.
-
-        Raises:
-            ValueError: if ``obj`` is not part of this simulation.
-        """
-        if self._world.get(obj.object_id) is not obj:
-            raise ValueError(f"remove_object: {obj!r} is not part of this simulation")
-        for manager in list(self._managers):
-            manager.remove_object(obj)
-        self._world.remove(obj)
-
-    def set_poses(
-        self,
-        object_ids: Sequence[int],
-        positions: np.ndarray,
-        orientations: np.ndarray,
-        *,
-        preserve_velocity: bool = True,
-    ) -> None:
-        """Set the poses of N objects in one call (arrays of shape (N, 3) and (N, 4)).
-
-        Raises:
-            ValueError: on shape mismatch, non-finite values or a zero quaternion.
-            KeyError: for an object id that is not registered.
-        """
-        self._world.set_poses(
-            object_ids, positions, orientations, preserve_velocity=preserve_velocity
-        )
-
-    def get_poses(self, object_ids: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-        """Return (positions (N, 3), orientations (N, 4)) copies for N objects.
-
-        Raises:
-            KeyError: for an object id that is not registered.
-        """
-        return self._world.get_poses(object_ids)
 
     # ----- callbacks, plugins, managers, motion systems -----------------------------------
 
@@ -359,7 +276,11 @@ class SimulationKernel(SimMissionApi, CollisionApi):
     def _phase_pre_step(self) -> None:
         if self.events.has_handlers(SimEvents.PRE_STEP):
             self.events.emit(
-                SimEvents.PRE_STEP, sim=self, step=self._step_count, sim_time=self.sim_time
+                SimEvents.PRE_STEP,
+                sim=self,
+                step=self._step_count,
+                dt=self._params.timestep,
+                sim_time=self.sim_time,
             )
 
     def _phase_callbacks(self) -> None:
@@ -375,10 +296,14 @@ class SimulationKernel(SimMissionApi, CollisionApi):
         dt = self._params.timestep
         if self.events.has_handlers(SimEvents.PRE_UPDATE):
             self.events.emit(SimEvents.PRE_UPDATE, sim=self, dt=dt)
+        world = self._world
+        before = world.emit_pre_update(dt) if world.has_update_listeners() else None
         for system in tuple(self._motion_systems):
             system.advance(dt)
-        for obj in self._world.updaters():
+        for obj in world.updaters():
             obj.update(dt)
+        if before is not None:
+            world.emit_post_update(dt, before)
         if self.events.has_handlers(SimEvents.POST_UPDATE):
             self.events.emit(SimEvents.POST_UPDATE, sim=self, dt=dt)
 
@@ -397,16 +322,14 @@ class SimulationKernel(SimMissionApi, CollisionApi):
             self._backend.sync(self._world.store)
         if self.events.has_handlers(SimEvents.POST_STEP):
             self.events.emit(
-                SimEvents.POST_STEP, sim=self, step=self._step_count, sim_time=self.sim_time
+                SimEvents.POST_STEP,
+                sim=self,
+                step=self._step_count,
+                dt=self._params.timestep,
+                sim_time=self.sim_time,
             )
 
     # ----- PyBullet's view, profiling -------------------------------------------------------
-
-    def _push_dirty(self, rows: np.ndarray) -> None:
-        store = self._world.store
-        dirty = rows[store.dirty[rows]]
-        if len(dirty):
-            self._backend.push_rows(store, dirty)
 
     def record_profiling(self, name: str, value_ms: float) -> None:
         """Add ``value_ms`` to custom profiling field ``name`` for the current step."""
@@ -415,10 +338,6 @@ class SimulationKernel(SimMissionApi, CollisionApi):
     def get_memory_usage(self) -> dict[str, float] | None:
         """``{"current_mb", "peak_mb"}`` of the Python heap; None unless memory profiling is on."""
         return self._memory.usage()
-
-    def sync_pybullet(self) -> int:
-        """Push every pose PyBullet has not seen yet (before raw ``pybullet`` queries)."""
-        return self._backend.sync(self._world.store)
 
     # ----- running ------------------------------------------------------------------------
 
@@ -475,19 +394,3 @@ class SimulationKernel(SimMissionApi, CollisionApi):
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-    # ----- rendering ----------------------------------------------------------------------
-
-    def disable_rendering(self) -> None:
-        """Stop GUI rendering (for fast spawning)."""
-        self._backend.set_rendering(False)
-
-    def enable_rendering(self) -> None:
-        """Resume GUI rendering."""
-        self._backend.set_rendering(True)
-
-    @contextmanager
-    def batch_spawn(self) -> Iterator[None]:
-        """Spawn many objects with rendering suspended; rendering is restored afterwards."""
-        with self._backend.rendering_disabled():
-            yield

@@ -8,7 +8,8 @@ their collision mode or attach another object.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -62,6 +63,7 @@ class World:
         self._agents: dict[int, SimObject] = {}
         self._updaters: dict[int, SimObject] = {}
         self._with_callbacks: dict[int, SimObject] = {}
+        self._update_listeners: dict[int, SimObject] = {}
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._saved_mass: dict[int, float] = {}
         self._next_id = 0
@@ -101,6 +103,10 @@ class World:
         """The object with ``object_id``, or None."""
         return self._objects.get(object_id)
 
+    def objects_by_id(self) -> Mapping[int, SimObject]:
+        """A read-only live view ``{object_id: object}``."""
+        return MappingProxyType(self._objects)
+
     def updaters(self) -> tuple[SimObject, ...]:
         """Objects whose class overrides ``update(dt)``, in spawn order."""
         return tuple(self._updaters.values())
@@ -119,7 +125,13 @@ class World:
         removed = list(self._objects.values())
         for obj in removed:
             obj.unbind()
-        for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
+        for registry in (
+            self._objects,
+            self._agents,
+            self._updaters,
+            self._with_callbacks,
+            self._update_listeners,
+        ):
             registry.clear()
         self._attachments.clear()
         self._saved_mass.clear()
@@ -163,6 +175,7 @@ class World:
             self._updaters[object_id] = obj
         if obj.has_callbacks():
             self._with_callbacks[object_id] = obj
+        self.on_entity_handlers_changed(obj)
         if dynamic:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
@@ -175,6 +188,8 @@ class World:
         self._events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
         if obj.spawned_event is not None:
             self._events.emit(obj.spawned_event, sim=self._sim, agent=obj)
+        if obj.has_event_bus():
+            obj.events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
 
     def remove(self, obj: SimObject) -> None:
         """Remove ``obj`` from the simulation and PyBullet; its children are detached in place.
@@ -191,7 +206,13 @@ class World:
             self.detach(obj, child, None, None)
         obj.on_removed()
         object_id, row = obj.object_id, obj.state_row
-        for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
+        for registry in (
+            self._objects,
+            self._agents,
+            self._updaters,
+            self._with_callbacks,
+            self._update_listeners,
+        ):
             registry.pop(object_id, None)
         self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
         self._backend.remove_body(obj.body_id)
@@ -200,6 +221,8 @@ class World:
             self._events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
             if obj.removed_event is not None:
                 self._events.emit(obj.removed_event, sim=self._sim, agent=obj)
+            if obj.has_event_bus():
+                obj.events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
         finally:
             obj.unbind()
             self._store.release(row)
@@ -305,6 +328,42 @@ class World:
             self._with_callbacks[obj.object_id] = obj
         else:
             self._with_callbacks.pop(obj.object_id, None)
+
+    def on_entity_handlers_changed(self, obj: SimObject) -> None:
+        """Track which objects listen to their own PRE_UPDATE / POST_UPDATE (only those pay)."""
+        bus = obj.events if obj.has_event_bus() else None
+        if bus is not None and (
+            bus.has_handlers(SimEvents.PRE_UPDATE) or bus.has_handlers(SimEvents.POST_UPDATE)
+        ):
+            self._update_listeners[obj.object_id] = obj
+        else:
+            self._update_listeners.pop(obj.object_id, None)
+
+    def has_update_listeners(self) -> bool:
+        """Whether any object listens to its own PRE_UPDATE / POST_UPDATE."""
+        return bool(self._update_listeners)
+
+    def emit_pre_update(self, dt: float) -> list[tuple[SimObject, np.ndarray]]:
+        """PRE_UPDATE on each listening object's bus (``dt``), in object id order; returns
+        their poses before the motion phase, for :meth:`emit_post_update`."""
+        store, out = self._store, []
+        for key in sorted(self._update_listeners):
+            obj = self._update_listeners[key]
+            row = obj.state_row
+            out.append((obj, np.concatenate([store.position[row], store.orientation[row]])))
+            obj.events.emit(SimEvents.PRE_UPDATE, sim=self._sim, dt=dt)
+        return out
+
+    def emit_post_update(self, dt: float, before: list[tuple[SimObject, np.ndarray]]) -> None:
+        """POST_UPDATE on each listening object's bus (``dt``, ``moved``)."""
+        store = self._store
+        for obj, pose in before:
+            if obj.sim_core is not self._sim:  # removed during the motion phase
+                continue
+            row = obj.state_row
+            now = np.concatenate([store.position[row], store.orientation[row]])
+            moved = not np.array_equal(now, pose)
+            obj.events.emit(SimEvents.POST_UPDATE, sim=self._sim, dt=dt, moved=moved)
 
     def _push_dynamic(self, row: int, preserve_velocity: bool) -> None:
         body = int(self._store.body_id[row])
