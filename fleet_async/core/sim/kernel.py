@@ -7,9 +7,12 @@ phases in order, each a call into the module that owns it:
 2. ``callbacks``        - simulation callbacks, plugins and per-object callbacks that are due.
 3. ``agent_update``     - PRE_UPDATE, motion systems and overridden ``update(dt)``, POST_UPDATE.
 4. ``attachments``      - attached objects follow their parent links.
-5. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
-6. ``collision_check``  - the collision pipeline, when due (``collision/``).
-7. ``events_post_step`` - the clock advances, the GUI is synced, POST_STEP event.
+5. ``pose_flush``       - push the step's poses to PyBullet (only with physics, the GUI or
+   ``sync_pybullet_every_step``; otherwise PyBullet is synced lazily).
+6. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
+7. ``collision_check``  - the collision pipeline, when due (``collision/``).
+8. ``events_post_step`` - the clock advances, POST_STEP event (then, with
+   ``sync_pybullet_every_step``, what its handlers wrote is pushed too).
 
 Profiling (``return_profiling``, ``profiling.py``) runs the same phases through a timer.
 Real-time pacing, the monitor and GUI input wrap this loop from the layer above (``view/``);
@@ -21,7 +24,8 @@ kernel plus scenario loading, world loading, recording, the monitor, the GUI and
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
 
 import numpy as np
@@ -109,11 +113,17 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
             self._params.profiling_interval, self._params.enable_time_profiling
         )
         self._memory = MemoryProfiler(self._params.enable_memory_profiling)
+        self._last_profiling: Mapping[str, Any] | None = None
+        self._collision_timings: dict[str, float] | None = None
+        # PyBullet sees the step's poses only where something needs them: a physics step, the
+        # GUI, or a script that asked for it (sync_pybullet_every_step).
+        flush = self._params.physics or self.is_gui or self._params.sync_pybullet_every_step
         self._phases: tuple[tuple[str, Callable[[], None]], ...] = (
             ("events_pre_step", self._phase_pre_step),
             ("callbacks", self._phase_callbacks),
             ("agent_update", self._phase_motion),
             ("attachments", self._world.attachments.follow_all),
+            *((("pose_flush", self.sync_pybullet),) if flush else ()),
             *((("step_simulation", self._phase_physics),) if self._params.physics else ()),
             ("collision_check", self._phase_collision),
             ("events_post_step", self._phase_post_step),
@@ -247,11 +257,17 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
 
     # ----- the step loop ------------------------------------------------------------------
 
-    def step_once(self, return_profiling: bool = False) -> dict[str, float] | None:
+    def step_once(self, return_profiling: bool = False) -> dict[str, Any] | None:
         """Run one step (skipped while paused).
 
         Args:
-            return_profiling: Return ``{phase: ms, ..., "total": ms}`` for this step.
+            return_profiling: Return this step's timings in ms: the reference API's keys
+                (``phase1_update``, ``phase2_pose_flush``, ``phase3_aabb_grid_flush``,
+                ``agent_update``, ``callbacks``, ``step_simulation``, ``collision_check``,
+                ``collision_breakdown`` when the collision check ran, ``events_pre_step``,
+                ``events_post_step``, ``events_collision``, ``monitor_update``, ``total``),
+                fleet_async's ``attachments``, and fields added by ``record_profiling``
+                (see ``sim/profiling.py``).
 
         Returns:
             The timings when ``return_profiling`` is set, else None.
@@ -261,9 +277,12 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
         if not self._initialized:
             self.initialize_simulation()
         self._world.in_step = True
+        self._collision_timings = None
         try:
             if return_profiling or self._profiler.log_summary:
-                timings = self._profiler.run(self._phases)
+                timings: dict[str, Any] | None = self._profiler.run(
+                    self._phases, lambda: self._collision_timings
+                )
             else:
                 for _, phase in self._phases:
                     phase()
@@ -271,7 +290,13 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
                 timings = None
         finally:
             self._world.in_step = False
+        self._last_profiling = None if timings is None else MappingProxyType(timings)
         return timings if return_profiling else None
+
+    @property
+    def last_profiling(self) -> Mapping[str, Any] | None:
+        """The last step's timings (read-only) if it was profiled, else None."""
+        return self._last_profiling
 
     def _phase_pre_step(self) -> None:
         if self.events.has_handlers(SimEvents.PRE_STEP):
@@ -308,18 +333,15 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
             self.events.emit(SimEvents.POST_UPDATE, sim=self, dt=dt)
 
     def _phase_physics(self) -> None:
-        self._backend.sync(self._world.store)
         self._backend.step_physics()
         self._world.read_back_dynamic()
 
     def _phase_collision(self) -> None:
         if self._collision.is_due(self._step_count, self._params.timestep):
-            self._collision.check()
+            _, self._collision_timings = self._collision.check()
 
     def _phase_post_step(self) -> None:
         self._step_count += 1
-        if self._backend.is_gui:
-            self._backend.sync(self._world.store)
         if self.events.has_handlers(SimEvents.POST_STEP):
             self.events.emit(
                 SimEvents.POST_STEP,
@@ -328,6 +350,8 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
                 dt=self._params.timestep,
                 sim_time=self.sim_time,
             )
+        if self._params.sync_pybullet_every_step:  # what POST_STEP handlers wrote, too
+            self.sync_pybullet()
 
     # ----- PyBullet's view, profiling -------------------------------------------------------
 

@@ -49,6 +49,11 @@ class SimulationParams:
         max_steps_per_frame: Steps run back to back to catch up when pacing falls behind.
         gui_min_fps: Minimum GUI redraw rate while pacing.
         seed: Seed of the simulation's random generator (``sim.rng``).
+        sync_pybullet_every_step: Push every pose PyBullet has not seen at the end of each
+            step, for scripts that call ``pybullet`` directly on the simulation's bodies. Off
+            by default: PyBullet is then synced lazily, when something needs its view (a
+            narrow-phase query, a frame, the GUI, physics, ``sim.sync_pybullet()``), and a
+            headless kinematic fleet never pays a reset per robot per step.
     """
 
     target_rtf: float = 1.0
@@ -86,6 +91,7 @@ class SimulationParams:
     monitor_x: int = -1
     monitor_y: int = -1
     seed: int = 0
+    sync_pybullet_every_step: bool = False
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(
