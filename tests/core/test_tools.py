@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -25,7 +26,12 @@ from fleet_async.core.geometry.vectors import (
     body_to_world_velocity_3d,
     normalize_vector_param,
 )
-from fleet_async.core.world.links import resolve_joint_index, resolve_link_index
+from fleet_async.core.world.links import (
+    joint_index,
+    link_index,
+    resolve_joint_index,
+    resolve_link_index,
+)
 
 # ----- velocities ------------------------------------------------------------------------
 
@@ -152,10 +158,21 @@ def test_resolve_link_index_unknown_name_lists_known_links(client: int) -> None:
     kuka = p.loadURDF("kuka_iiwa/model.urdf", physicsClientId=client)
 
     with pytest.raises(ValueError, match="no link named 'gripper'") as info:
-        resolve_link_index(kuka, "gripper", physics_client_id=client)
+        link_index(kuka, "gripper", physics_client_id=client)
 
     assert "lbr_iiwa_link_0" in str(info.value)
     assert "lbr_iiwa_link_7" in str(info.value)
+
+
+def test_resolve_index_returns_minus_one_for_an_unknown_name(client: int, caplog) -> None:
+    # Seed, tools.resolve_link_index: "Returns -1 if link is "base_link" or if link name not
+    # found"; resolve_joint_index: "Returns -1 if joint name not found". Logged, with the names.
+    kuka = p.loadURDF("kuka_iiwa/model.urdf", physicsClientId=client)
+    with caplog.at_level(logging.WARNING):
+        assert resolve_link_index(kuka, "gripper", physics_client_id=client) == -1
+        assert resolve_joint_index(kuka, "elbow", physics_client_id=client) == -1
+    assert "no link named 'gripper'" in caplog.text and "lbr_iiwa_link_7" in caplog.text
+    assert "no joint named 'elbow'" in caplog.text
 
 
 def test_resolve_link_index_rejects_bad_types_and_bodies(client: int) -> None:
@@ -185,13 +202,13 @@ def test_resolve_joint_index_unknown_name_lists_known_joints(client: int) -> Non
     r2d2 = p.loadURDF("r2d2.urdf", physicsClientId=client)
 
     with pytest.raises(ValueError, match="no joint named 'elbow'") as info:
-        resolve_joint_index(r2d2, "elbow", physics_client_id=client)
+        joint_index(r2d2, "elbow", physics_client_id=client)
 
     assert "head_swivel" in str(info.value)
     assert "tobox" in str(info.value)
     # A link name is not a joint name.
     with pytest.raises(ValueError, match="no joint named 'head'"):
-        resolve_joint_index(r2d2, "head", physics_client_id=client)
+        joint_index(r2d2, "head", physics_client_id=client)
 
 
 def test_lookup_uses_the_given_client() -> None:

@@ -60,6 +60,10 @@ class ObjectsApi:
         body (-1)."""
         return self._backend.body_mass(body_id, link) if body_id >= 0 else 0.0
 
+    def body_total_mass(self, body_id: int) -> float:
+        """Mass (kg) of every link of ``body_id`` summed (a URDF's total); 0.0 for no body."""
+        return self._backend.body_total_mass(body_id) if body_id >= 0 else 0.0
+
     def get_object_by_id(self, object_id: int) -> SimObject | None:
         """The object with ``object_id``, or None."""
         return self._world.get(object_id)

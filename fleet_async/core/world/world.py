@@ -17,14 +17,14 @@ import pybullet as p
 
 from fleet_async.core.base.events import EventBus, SimEvents
 from fleet_async.core.base.types import CollisionMode
-from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.world.attachments import Attachment, AttachmentSet
+from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
-from fleet_async.core.world.links import resolve_link_index
+from fleet_async.core.world.carrying import Carrying
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
     from fleet_async.core.bodies.sim_object import SimObject
+    from fleet_async.core.bodies.standalone import StandaloneState
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["World"]
@@ -32,7 +32,7 @@ __all__ = ["World"]
 logger = logging.getLogger(__name__)
 
 
-class World:
+class World(Carrying):
     """Objects, rows and attachments of one simulation.
 
     Args:
@@ -149,14 +149,16 @@ class World:
             owner = "this" if obj.sim_core is self._sim else "another"
             raise ValueError(f"add_object: {obj!r} already belongs to {owner} simulation")
         body = obj.body_id
+        solo = obj.standalone_state
         pos: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
         orn: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0, 1.0)
-        if body >= 0:
+        if body >= 0 and not (solo is not None and solo.pose_written):
             pos, orn = self._backend.read_pose(body)
-        elif obj.state_row >= 0:
+        elif obj.state_row >= 0:  # the pose it kept outside a simulation
             pose = obj.get_pose()
             pos, orn = pose.position, pose.orientation
-        dynamic = self._physics and obj.mass > 0
+        # Dynamics move a body only if PyBullet gives its base a mass.
+        dynamic = self._physics and body >= 0 and self._backend.body_mass(body) > 0
         object_id = self._next_id
         self._next_id += 1
         row = self._store.allocate(
@@ -180,8 +182,23 @@ class World:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
             p.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self._backend.client)
+        if solo is not None:
+            self._adopt_standalone(obj, solo, row)
         if notify:
             self.announce(obj)
+
+    def _adopt_standalone(self, obj: SimObject, solo: StandaloneState, row: int) -> None:
+        """Bring in what ``obj`` kept outside a simulation: its pose, reaching this client's
+        PyBullet, and attachments to objects already here (the others wait on their end)."""
+        if solo.pose_written:
+            self._store.dirty[row] = True
+            if not self.in_step:
+                self._backend.push_rows(self._store, np.array([row]))
+        for record in list(solo.links):
+            other = record.child if record.parent is obj else record.parent
+            if other.sim_core is self._sim:
+                solo.forget(record)
+                self.attach(record.parent, record.child, record.link_index, record.relative, False)
 
     def announce(self, obj: SimObject) -> None:
         """Emit the spawn events of ``obj`` (``add`` does it unless told not to)."""
@@ -390,104 +407,3 @@ class World:
             physicsClientId=self._backend.client,
         )
         return np.asarray(state[4], dtype=float), np.asarray(state[5], dtype=float)
-
-    # ----- attach / detach (SimObject.attach_object and detach_object land here) ----------
-
-    def attach(
-        self,
-        parent: SimObject,
-        child: SimObject,
-        link: int | str,
-        relative_pose: Pose | None,
-        joint_type: int,
-        keep_world_pose: bool,
-    ) -> bool:
-        """Attach ``child`` to ``parent``'s ``link``; see ``SimObject.attach_object``."""
-        if child is parent:
-            raise ValueError(f"attach_object: cannot attach {parent!r} to itself")
-        if child.sim_core is not self._sim:
-            raise ValueError(
-                f"attach_object: {child!r} is not part of the same simulation as {parent!r}"
-            )
-        held = self._attachments.of_child(child)
-        if held is not None:
-            where = "this object" if held.parent is parent else repr(held.parent)
-            raise ValueError(
-                f"attach_object: {child!r} is already attached to {where}; detach it first"
-            )
-        if self._attachments.is_ancestor(child, parent):
-            raise ValueError(
-                f"attach_object: {child!r} carries {parent!r}; attaching would make a cycle"
-            )
-        if relative_pose is not None and keep_world_pose:
-            raise ValueError(
-                "attach_object: give either relative_pose or keep_world_pose=True, not both"
-            )
-        if joint_type != p.JOINT_FIXED:
-            raise ValueError(
-                f"attach_object: joint_type {joint_type!r} is not supported; "
-                "only pybullet.JOINT_FIXED (4) is"
-            )
-        link_index = (
-            resolve_link_index(parent.body_id, link, physics_client_id=self._backend.client)
-            if parent.body_id >= 0
-            else -1
-        )
-        if keep_world_pose:
-            link_pos, link_orn = (
-                self.link_pose(parent, link_index)
-                if link_index != -1
-                else (
-                    self._store.position[parent.state_row],
-                    self._store.orientation[parent.state_row],
-                )
-            )
-            relative = (
-                Pose.from_arrays_unchecked(link_pos.copy(), link_orn.copy())
-                .inverse()
-                .compose(child.get_pose())
-            )
-        else:
-            relative = relative_pose if relative_pose is not None else Pose([0.0, 0.0, 0.0])
-        att = Attachment(parent, child, link_index, relative)
-        self._attachments.add(att)
-        row = child.state_row
-        if not self._store.kinematic[row]:
-            # A carried body is moved by its carrier, not by dynamics, until it is dropped.
-            self._saved_mass[child.object_id] = child.mass
-            self._backend.set_body_mass(child.body_id, 0.0)
-            self._store.kinematic[row] = True
-            self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
-        self._attachments.place_child(att)
-        if not self.in_step:
-            self._backend.sync(self._store)
-        return True
-
-    def detach(
-        self,
-        parent: SimObject,
-        child: SimObject,
-        drop_pose: Pose | None,
-        drop_relative_pose: Pose | None,
-    ) -> bool:
-        """Detach ``child`` from ``parent``; see ``SimObject.detach_object``."""
-        if drop_pose is not None and drop_relative_pose is not None:
-            raise ValueError("detach_object: give either drop_pose or drop_relative_pose, not both")
-        att = self._attachments.of_child(child)
-        if att is None or att.parent is not parent:
-            logger.warning(
-                "detach_object: %r is not attached to %r; nothing detached", child, parent
-            )
-            return False
-        self._attachments.remove(child)
-        mass = self._saved_mass.pop(child.object_id, None)
-        if mass is not None:
-            row = child.state_row
-            self._backend.set_body_mass(child.body_id, mass)
-            self._store.kinematic[row] = False
-            self._dynamic_rows = np.append(self._dynamic_rows, row)
-        if drop_pose is not None:
-            child.set_pose(drop_pose, preserve_velocity=False)
-        elif drop_relative_pose is not None:
-            child.set_pose(child.get_pose().compose(drop_relative_pose), preserve_velocity=False)
-        return True
