@@ -34,7 +34,8 @@ class ObjectCallbacks:
         Raises:
             ValueError: if ``frequency`` is not a number > 0.
         """
-        self._callbacks.add(callback, frequency, owner=f"{self!r}.register_callback")
+        now = 0.0 if self.sim_core is None else self.sim_core.sim_time
+        self._callbacks.add(callback, frequency, owner=f"{self!r}.register_callback", now=now)
         if self.sim_core is not None:
             self.sim_core.world.on_object_callbacks_changed(self)  # type: ignore[arg-type]
 

@@ -295,11 +295,9 @@ class CollisionSystem:
         t2 = time.perf_counter()
         if len(idx):
             skip_static = self.ignore_static if ignore_static is None else ignore_static
-            static_a, static_b = mode[idx[:, 0]] == _STATIC, mode[idx[:, 1]] == _STATIC
-            keep = ~(static_a & static_b)
-            if skip_static:
-                keep &= ~(static_a | static_b)
-            idx = idx[keep]
+            if skip_static:  # else static-static pairs are checked too, once (they never move)
+                keep = (mode[idx[:, 0]] != _STATIC) & (mode[idx[:, 1]] != _STATIC)
+                idx = idx[keep]
             flat_pair = flat[idx[:, 0]] | flat[idx[:, 1]]
             idx = idx[
                 aabb_overlap(

@@ -199,7 +199,7 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
         frequency: float | None = None,
     ) -> None:
         """Call ``callback(sim, dt)`` every step (None) or at ``frequency`` Hz of sim time."""
-        self._callbacks.add(callback, frequency, owner="register_callback")
+        self._callbacks.add(callback, frequency, owner="register_callback", now=self.sim_time)
 
     def unregister_callback(self, callback_func: Callable[..., Any]) -> bool:
         """Remove a callback; return whether it was registered."""
@@ -220,7 +220,10 @@ class SimulationKernel(SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi)
         plugin = as_plugin(plugin_or_cls, cast("MultiRobotSimulationCore", self), config)
         freq = frequency if frequency is not None else plugin.frequency
         self._plugin_schedule.add(
-            plugin.on_step, freq, owner=f"register_plugin({type(plugin).__name__})"
+            plugin.on_step,
+            freq,
+            owner=f"register_plugin({type(plugin).__name__})",
+            now=self.sim_time,
         )
         self._plugins.append(plugin)
         plugin.on_init()
