@@ -95,11 +95,11 @@ def test_a_static_object_refuses_set_pose_until_its_mode_changes(sim, caplog):
     assert shelf.set_pose(Pose.from_xyz(2, 0, 0.1)) is True and shelf.get_pose().x == 2.0
 
 
-def test_is_kinematic(sim):
+def test_is_kinematic_means_massless(sim):
     crate = SimObject.from_mesh(BOX, BOX, Pose.from_xyz(0, 0, 0.1), sim_core=sim, mass=2.0)
-    assert crate.is_kinematic  # physics is off: only the simulator moves it
-    loose = SimObject(-1, sim_core=None, mass=0.0)
-    assert loose.is_kinematic
+    assert not crate.is_kinematic
+    assert SimObject.from_mesh(BOX, BOX, Pose.from_xyz(1, 0, 0.1), sim_core=sim).is_kinematic
+    assert SimObject(-1, sim_core=None, mass=0.0).is_kinematic
     assert not SimObject(-1, sim_core=None, mass=1.0).is_kinematic
 
 
@@ -113,7 +113,7 @@ def test_from_urdf_mass_none_keeps_and_reports_the_urdf_masses(sim):
     assert links == pytest.approx([4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3])
     assert kuka.mass == pytest.approx(17.5)  # the URDF's total
     light = Agent.from_urdf("kuka_iiwa", use_fixed_base=True, mass=0.0, sim_core=sim)
-    assert light.mass == 0.0 and light.is_kinematic
+    assert light.mass == 0.0 and light.is_kinematic and not kuka.is_kinematic
     assert p.getDynamicsInfo(light.body_id, 3, physicsClientId=sim.client)[0] == 0.0
 
 

@@ -143,3 +143,12 @@ def test_the_seeds_rail_arm_joint_tolerance_example(sim):
     assert action.status is ActionStatus.COMPLETED
     assert arm.get_joint_state_by_name("rail_joint")[0] == pytest.approx(0.3)
     assert arm.collision_mode is CollisionMode.NORMAL_3D
+
+
+def test_a_grid_that_is_too_small_is_the_error_reported_first():
+    manager = AgentManager()  # no simulation, so no random generator either
+    grid = GridSpawnParams(x_min=0, x_max=0, y_min=0, y_max=0, spacing=[1, 1, 0], offset=[0, 0, 0])
+    with pytest.raises(ValueError, match="spawn_grid_counts: 2 objects do not fit"):
+        manager.spawn_grid_counts(grid, [(AgentSpawnParams(visual_shape=BOX), 2)])
+    with pytest.raises(ValueError, match="random generator"):
+        manager.spawn_grid_counts(grid, [(AgentSpawnParams(visual_shape=BOX), 1)])

@@ -186,14 +186,12 @@ class SimObject(ObjectCallbacks):
 
     @property
     def is_kinematic(self) -> bool:
-        """Whether the simulator, not PyBullet's dynamics, moves the body.
+        """Whether the object is massless (``mass == 0``), as the reference implementation says.
 
-        True for a massless body, for every body when physics is off, and for a carried one.
-        Outside a simulation: whether the mass is 0.
+        A massless body is only ever moved by the simulator. With physics off every body is
+        moved that way, whatever its mass.
         """
-        if self.sim_core is None:
-            return self.mass == 0.0
-        return bool(self._store.kinematic[self._row])
+        return self.mass == 0.0
 
     def set_collision_mode(self, mode: CollisionMode | str) -> None:
         """Change the collision mode; DISABLED also turns off PyBullet contacts."""

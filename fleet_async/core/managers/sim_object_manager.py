@@ -285,7 +285,9 @@ class SimObjectManager(Generic[T]):
         """
         what = "spawn_grid_mixed"
         params, probs = self._unpack(spawn_params_list, what)
-        cells, kinds = assign_by_probability(grid_params, num_objects, probs, self._rng(what))
+        cells, kinds = assign_by_probability(
+            grid_params, num_objects, probs, lambda: self._rng(what)
+        )
         return self._spawn_on_cells(grid_params, cells, kinds, params, what, name_prefix)
 
     def spawn_grid_counts(
@@ -305,7 +307,7 @@ class SimObjectManager(Generic[T]):
         """
         what = "spawn_grid_counts"
         params, counts = self._unpack(spawn_params_count_list, what)
-        cells, kinds = assign_by_counts(grid_params, counts, self._rng(what))
+        cells, kinds = assign_by_counts(grid_params, counts, lambda: self._rng(what))
         return self._spawn_on_cells(grid_params, cells, kinds, params, what, name_prefix)
 
     def spawn_objects_batch(self, params_list: Sequence[SimObjectSpawnParams]) -> list[T]:
