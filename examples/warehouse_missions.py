@@ -63,7 +63,7 @@ def prepare(
     fleet = sim.get_manager("pickers").objects[:robots]
     for i, robot in enumerate(fleet):
         robot.name = f"picker{i}"
-    totes = [o for o in sim.sim_objects if o.name == "tote"][:orders]
+    totes = [o for o in sim.sim_objects if (o.name or "").startswith("tote_")][:orders]
     for k, tote in enumerate(totes):
         tote.name = f"tote{k}"
     return fleet, [Order(k, tote, k % len(STATIONS)) for k, tote in enumerate(totes)]

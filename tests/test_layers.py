@@ -47,6 +47,7 @@ FACADES = (
     "config_utils",
     "core_simulation",
     "data_monitor",
+    "events",
     "geometry",
     "logging_utils",
     "sim_object",

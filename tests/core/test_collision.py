@@ -51,11 +51,20 @@ def test_static_and_disabled_modes(method):
         ghost = cube(sim, 0.0, y=0.2, mode=CollisionMode.DISABLED)
         robot = cube(sim, 0.1, y=0.2)
         pairs, _ = sim.check_collisions()
-        # the robot touches both walls; walls never pair with each other; the ghost with nobody
+        # The robot touches both walls; with ignore_static_collision=False the two overlapping
+        # walls are reported too (seed, filter_aabb_pairs: "ignore_static - If True, skip
+        # collision checks with static objects"); the ghost pairs with nobody.
         assert pairs == sorted(
-            [(wall.object_id, robot.object_id), (other_wall.object_id, robot.object_id)]
+            [
+                (wall.object_id, other_wall.object_id),
+                (wall.object_id, robot.object_id),
+                (other_wall.object_id, robot.object_id),
+            ]
         )
         assert all(ghost.object_id not in pair for pair in pairs)
+        robot.set_pose(Pose.from_xyz(5.0, 0.2, 0.5))
+        pairs, _ = sim.check_collisions()  # the walls never move: their pair stays active
+        assert pairs == [(wall.object_id, other_wall.object_id)]
 
 
 def test_ignore_static_collision_hides_static_pairs():

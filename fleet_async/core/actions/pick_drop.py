@@ -1,10 +1,10 @@
 """PickAction and DropAction, built on one shared approach / act / retreat sequence.
 
-Both actions run the same stages: drive to an approach pose ``approach_offset`` metres short
-of the target (facing it), drive in to ``pick_offset`` / ``drop_offset`` from it, attach or
-detach, and back out to the approach pose. A sub-move shorter than ``move_skip_threshold`` is
-skipped. Only what differs lives in the subclasses: which object is the target, and what
-"act" does.
+Both actions run the same stages: drive to an approach pose ``approach_offset`` metres from
+the target (facing it), drive to ``pick_offset`` / ``drop_offset`` from it, attach or detach,
+and back out to the approach pose. A sub-move shorter than ``move_skip_threshold`` is skipped,
+and so are all of them on a fixed-base agent (its goals are ignored). Only what differs lives
+in the subclasses: which object is the target, and what "act" does.
 
 With ``joint_targets`` or ``ee_target_position`` the act is done by an arm: the joints reach
 (the given targets, or an IK solution for the end-effector target), the object is attached to
@@ -26,7 +26,7 @@ from fleet_async.core.actions.action import (
     DEFAULT_EE_TOLERANCE,
     DEFAULT_MAX_FORCE,
     DEFAULT_MOVE_SKIP_THRESHOLD,
-    Action,
+    TrackedAction,
     WaitHint,
 )
 from fleet_async.core.actions.arm_actions import format_position
@@ -46,7 +46,7 @@ logger = logging.getLogger(__name__)
 _Stage = tuple[Any, ...]
 
 
-class _ApproachAction(Action):
+class _ApproachAction(TrackedAction):
     """Shared machinery of pick and drop: a queue of move / act stages.
 
     Subclasses are dataclasses that declare the fields (in the reference API's order) and set
@@ -115,8 +115,9 @@ class _ApproachAction(Action):
         target = self._target_position(agent)
         if isinstance(target, str):
             return target
-        # An arm on a base that cannot move reaches from where it stands.
-        drives = not (uses_arm and agent.motion_blocker is not None)
+        # An arm on a base that cannot move, and any fixed-base agent (whose goals are
+        # ignored), acts from where it stands.
+        drives = agent.motion_blocker is None or not (uses_arm or agent.use_fixed_base)
         here = agent.get_pose().position
         offset = float(getattr(self, self._in_offset_field))
         inner = calculate_offset_pose(target, here, offset, keep_height=True)
@@ -125,8 +126,9 @@ class _ApproachAction(Action):
         stages: deque[_Stage] = deque()
         approach = None
         if self.use_approach and drives:
+            # approach_offset is the approach pose's distance from the target itself.
             approach = self.approach_pose or calculate_offset_pose(
-                target, here, offset + float(self.approach_offset), keep_height=True
+                target, here, float(self.approach_offset), keep_height=True
             )
             stages.append(("move", approach, phases["APPROACHING"], MovementDirection.FORWARD))
         if drives:
@@ -186,7 +188,7 @@ class _ApproachAction(Action):
         self._arm_targets = None
         return True
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: Agent, dt: float) -> bool:
         """Run stages until one has to wait for motion, or all are done."""
         if self._stages is None:
             planned = self._plan(agent)

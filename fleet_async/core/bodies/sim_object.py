@@ -1,13 +1,17 @@
 """SimObject: a handle onto one row of the simulation's state store.
 
 A SimObject owns no pose of its own: ``get_pose`` reads the store, ``set_pose`` writes it and
-marks the row dirty. An object created without a simulation keeps a private one-row store and
-talks to PyBullet client 0 directly, until ``sim.add_object`` adopts it.
+marks the row dirty. An object created without a simulation keeps its own pose and what it
+carries (``standalone.py``), talking to PyBullet client 0 directly, until ``sim.add_object``
+adopts it.
+
+A STATIC object "never moves" (the reference API's CollisionMode): ``set_pose`` refuses it with
+a warning and returns False, until ``set_collision_mode`` makes it movable.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import numpy as np
@@ -17,6 +21,7 @@ from fleet_async.core.base.events import EventBus
 from fleet_async.core.base.logging_utils import NamedLazyLogger
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.base.types import CollisionMode, coerce_enum
+from fleet_async.core.bodies.object_callbacks import ObjectCallbacks
 from fleet_async.core.bodies.removal import ObjectRemovedError, RemovedState, removed_message
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.bodies.spawning import (
@@ -25,6 +30,7 @@ from fleet_async.core.bodies.spawning import (
     load_sdf_objects,
     wrap_all,
 )
+from fleet_async.core.bodies.standalone import StandaloneState, read_standalone_mass
 from fleet_async.core.geometry.approach import find_nearest
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.vectors import as_orientation, as_position
@@ -37,7 +43,7 @@ if TYPE_CHECKING:
 __all__ = ["ObjectRemovedError", "ShapeParams", "SimObject", "SimObjectSpawnParams"]
 
 
-class SimObject:
+class SimObject(ObjectCallbacks):
     """A body in the simulation: robot, pallet, shelf or marker.
 
     Args:
@@ -52,13 +58,8 @@ class SimObject:
             their own state is ready).
 
     Attributes:
-        object_id: Unique id assigned by the simulation (-1 while standalone).
-        name: Human-readable name.
-        body_id: PyBullet body id.
-        mass: kg.
-        pickable: Whether it can be picked.
-        user_data: Free-form metadata.
-        sim_core: The simulation it belongs to, or None.
+        object_id: Unique id assigned by the simulation (-1 while standalone); ``name``,
+            ``body_id``, ``mass``, ``pickable``, ``user_data`` and ``sim_core`` as given.
     """
 
     _spawn_params_cls: ClassVar[type[SimObjectSpawnParams]] = SimObjectSpawnParams
@@ -94,19 +95,15 @@ class SimObject:
         self._log = NamedLazyLogger(__name__)
         self._row = -1  # no row until bound to a simulation or given a standalone store
         self._removed: str | None = None  # why using the object fails once it left its sim
+        self._solo: StandaloneState | None = None
         if sim_core is not None:
-            self.mass = float(mass) if mass is not None else sim_core.body_mass(self.body_id)
+            # mass=None: the body's own masses, every link summed (what a URDF says).
+            self.mass = float(mass) if mass is not None else sim_core.body_total_mass(body_id)
             if register:  # subclasses that finish their own setup first pass False and add later
                 sim_core.add_object(self)
         else:
-            self.mass = float(mass) if mass is not None else self._standalone_mass()
-            self._store = KinematicState(1)
-            self._row = self._store.allocate(
-                -1,
-                self.body_id,
-                *self._standalone_pose(),
-                collision_code=COLLISION_CODES[self._collision_mode.value],
-            )
+            self.mass = float(mass) if mass is not None else read_standalone_mass(self.body_id)
+            self._go_standalone(None)
         self._refresh_log_prefix()
 
     def __repr__(self) -> str:
@@ -124,6 +121,8 @@ class SimObject:
         self.sim_core = sim
         self._store = store
         self._row = row
+        self._solo = None
+        self._removed = None
         self.object_id = object_id
         self._refresh_log_prefix()
 
@@ -142,6 +141,15 @@ class SimObject:
         if self._removed is not None:
             raise ObjectRemovedError(f"{what}: {self._removed}")
 
+    def _go_standalone(self, pose: tuple[Sequence[float], Sequence[float]] | None) -> None:
+        self._solo = StandaloneState(self, COLLISION_CODES[self._collision_mode.value], pose)
+        self._store, self._row = self._solo.store, self._solo.row
+
+    @property
+    def standalone_state(self) -> StandaloneState | None:
+        """Pose and attachments kept while outside a simulation (None inside one)."""
+        return self._solo
+
     @property
     def state_row(self) -> int:
         """Row of this object in the state store (stable for its lifetime in a simulation)."""
@@ -158,8 +166,12 @@ class SimObject:
     def events(self) -> EventBus:
         """Per-entity event bus, created on first access."""
         if self._events is None:
-            self._events = EventBus()
+            self._events = EventBus(on_change=self._on_handlers_changed)
         return self._events
+
+    def _on_handlers_changed(self, event: str) -> None:
+        if self.sim_core is not None:
+            self.sim_core.world.on_entity_handlers_changed(self)
 
     def has_event_bus(self) -> bool:
         """Whether anyone has asked for this object's bus yet (emitters skip it otherwise)."""
@@ -174,6 +186,15 @@ class SimObject:
     def is_static(self) -> bool:
         """Whether the object is STATIC (never moves)."""
         return self._collision_mode is CollisionMode.STATIC
+
+    @property
+    def is_kinematic(self) -> bool:
+        """Whether the object is massless (``mass == 0``), as the reference implementation says.
+
+        A massless body is only ever moved by the simulator. With physics off every body is
+        moved that way, whatever its mass.
+        """
+        return self.mass == 0.0
 
     def set_collision_mode(self, mode: CollisionMode | str) -> None:
         """Change the collision mode; DISABLED also turns off PyBullet contacts."""
@@ -198,7 +219,8 @@ class SimObject:
         """Move the object (and everything attached to it) to ``pose``.
 
         Returns:
-            True if the pose changed, False if it already was ``pose``.
+            True if the pose changed; False if it already was ``pose``, or (with a warning) if
+            the object is STATIC: change its collision mode first to move it.
         """
         if not isinstance(pose, Pose):
             raise TypeError(f"set_pose: expected a Pose, got {pose!r}")
@@ -223,14 +245,20 @@ class SimObject:
         store, row = self._store, self._row
         if np.array_equal(store.position[row], pos) and np.array_equal(store.orientation[row], orn):
             return False
+        if self._collision_mode is CollisionMode.STATIC:
+            self._log.warning(
+                "set_pose refused: a STATIC object never moves; "
+                "call set_collision_mode(...) first to move it"
+            )
+            return False
+        if self._solo is not None:
+            self._solo.write_pose(pos, orn)
+            return True
         store.position[row] = pos
         store.orientation[row] = orn
         store.mark_moved(row)
         if self.sim_core is not None:
             self.sim_core.world.on_pose_written(self, preserve_velocity)
-        elif self.body_id >= 0:
-            p.resetBasePositionAndOrientation(self.body_id, pos.tolist(), orn.tolist())
-            store.dirty[row] = False
         return True
 
     # ----- attachments --------------------------------------------------------------------
@@ -252,16 +280,32 @@ class SimObject:
             joint_type: Only ``pybullet.JOINT_FIXED`` is supported.
             keep_world_pose: Compute ``relative_pose`` so the child stays where it is.
 
+        Works inside a simulation and outside one (both objects without a simulation; see
+        ``standalone.py``).
+
         Returns:
-            True once attached.
+            True once attached; False (with a warning naming the body's links) for a link name
+            this object does not have.
 
         Raises:
             ValueError: attaching to itself, an object already attached (to this or another
-                parent), a cycle, objects of different simulations, an unknown link, both
-                ``relative_pose`` and ``keep_world_pose``, or an unsupported ``joint_type``.
+                parent), a cycle, objects of different simulations, a link index out of range,
+                both ``relative_pose`` and ``keep_world_pose``, or an unsupported
+                ``joint_type``.
         """
+        if joint_type != p.JOINT_FIXED:
+            raise ValueError(
+                f"attach_object: joint_type {joint_type!r} is not supported; "
+                "only pybullet.JOINT_FIXED (4) is"
+            )
+        if self._solo is not None:
+            if obj.sim_core is not None:
+                raise ValueError(
+                    f"attach_object: {obj!r} is part of a simulation and {self!r} is not"
+                )
+            return self._solo.attach(obj, parent_link_index, relative_pose, keep_world_pose)
         return self._require_sim("attach_object").world.attach(
-            self, obj, parent_link_index, relative_pose, joint_type, keep_world_pose
+            self, obj, parent_link_index, relative_pose, keep_world_pose
         )
 
     def detach_object(
@@ -275,13 +319,17 @@ class SimObject:
         Raises:
             ValueError: if both ``drop_pose`` and ``drop_relative_pose`` are given.
         """
+        if self._solo is not None:
+            return self._solo.detach(obj, drop_pose, drop_relative_pose)
         return self._require_sim("detach_object").world.detach(
             self, obj, drop_pose, drop_relative_pose
         )
 
     def get_attached_objects(self) -> list[SimObject]:
         """Objects attached to this one, in attachment order."""
-        return [] if self.sim_core is None else self.sim_core.attachments.children_of(self)
+        if self._solo is not None:
+            return self._solo.children()
+        return self._require_sim("get_attached_objects").attachments.children_of(self)
 
     @property
     def attached_objects(self) -> list[SimObject]:
@@ -290,10 +338,12 @@ class SimObject:
 
     def is_attached(self) -> bool:
         """Whether this object is carried by another."""
-        return self.sim_core is not None and self.sim_core.attachments.of_child(self) is not None
+        return self.get_attached_parent() is not None
 
     def get_attached_parent(self) -> SimObject | None:
         """The object carrying this one, or None."""
+        if self._solo is not None:
+            return self._solo.parent()
         att = None if self.sim_core is None else self.sim_core.attachments.of_child(self)
         return None if att is None else att.parent
 
@@ -318,35 +368,6 @@ class SimObject:
         """Whether this object's class overrides :meth:`update` (the simulation then calls it
         every step; objects that do not cost nothing)."""
         return type(self).update is not SimObject.update
-
-    def register_callback(
-        self, callback: Callable[[SimObject, float], Any], frequency: float = 0.25
-    ) -> None:
-        """Call ``callback(obj, dt)`` every ``1 / frequency`` seconds of sim time.
-
-        Raises:
-            ValueError: if ``frequency`` is not a number > 0.
-        """
-        self._callbacks.add(callback, frequency, owner=f"{self!r}.register_callback")
-        if self.sim_core is not None:
-            self.sim_core.world.on_object_callbacks_changed(self)
-
-    def unregister_callback(self, callback: Callable[..., Any]) -> bool:
-        """Remove a callback; return whether it was registered."""
-        return self._callbacks.remove(callback)
-
-    def has_callbacks(self) -> bool:
-        """Whether any per-object callbacks are registered."""
-        return len(self._callbacks) > 0
-
-    def execute_callbacks(self, current_time: float) -> None:
-        """Run the callbacks due at ``current_time`` (sim seconds)."""
-        for callback, dt in self._callbacks.due(current_time):
-            callback(self, dt)
-
-    def reset_callbacks(self) -> None:
-        """Restart the callback schedule from sim time 0."""
-        self._callbacks.reset()
 
     # ----- constructors -------------------------------------------------------------------
 
@@ -467,30 +488,11 @@ class SimObject:
             use_fixed_base,
         )
 
-    # ----- helpers ------------------------------------------------------------------------
-
     def _require_sim(self, what: str) -> MultiRobotSimulationCore:
         self.check_not_removed(what)
         if self.sim_core is None:
             raise ValueError(f"{what}: {self!r} is not part of a simulation")
         return self.sim_core
-
-    # A standalone object talks to PyBullet client 0; ``add_object`` re-reads the body from
-    # the simulation's own client, so a failed read here only affects standalone use.
-
-    def _standalone_mass(self) -> float:
-        try:
-            return float(p.getDynamicsInfo(self.body_id, -1)[0]) if self.body_id >= 0 else 0.0
-        except p.error:
-            return 0.0
-
-    def _standalone_pose(self) -> tuple[Sequence[float], Sequence[float]]:
-        try:
-            if self.body_id >= 0:
-                return p.getBasePositionAndOrientation(self.body_id)
-        except p.error:
-            pass
-        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
 
     def _refresh_log_prefix(self) -> None:
         label = f"{self.object_id}:{self.name}" if self.name else str(self.object_id)

@@ -48,6 +48,7 @@ class AgentMissionApi:
         ``cancel()`` it, or watch ``status``, ``phase`` and ``progress``."""
         runtime = self._mission_runtime("agent.submit")
         agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        action.awaited = True  # e.g. a move on a fixed base fails rather than being skipped
         agent.add_action(action)
         return runtime.wait_action(agent, action)
 

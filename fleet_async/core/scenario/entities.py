@@ -248,12 +248,19 @@ def _spawn_objects(
         if manager is None:
             return [plan.cls.from_params(plan.params, sim)]
         if plan.grid is not None:
-            return list(manager.spawn_objects_grid(plan.count, plan.grid, plan.params))
+            prefix = plan.params.name  # a named grid entry: <name>_0, <name>_1, ...
+            return list(
+                manager.spawn_objects_grid(plan.count, plan.grid, plan.params, name_prefix=prefix)
+            )
         return list(manager.spawn_objects_batch([plan.params]))
     configs = [plan.config]
     if plan.grid is not None:
         cells = plan.grid.cell_positions()[: plan.count].tolist()
-        configs = [{**plan.config, "pose": cell} for cell in cells]
+        name = plan.config.get("name")
+        configs = [
+            {**plan.config, "pose": cell, **({} if name is None else {"name": f"{name}_{k}"})}
+            for k, cell in enumerate(cells)
+        ]
     labels = [
         f"{where}{plan.label}" + (f".grid[{k}]" if plan.grid is not None else "")
         for k in range(len(configs))

@@ -77,6 +77,11 @@ class SimulationParams:
         monitor_height: Monitor window height in pixels.
         monitor_x: Monitor window x position in pixels (-1: placed by the window system).
         monitor_y: Monitor window y position in pixels (-1: placed by the window system).
+        sync_pybullet_every_step: Push every pose PyBullet has not seen at the end of each
+            step, for scripts that call ``pybullet`` directly on the simulation's bodies. Off
+            by default: PyBullet is then synced lazily, when something needs its view (a
+            narrow-phase query, a frame, the GUI, physics, ``sim.sync_pybullet()``), and a
+            headless kinematic fleet never pays a reset per robot per step.
     """
 
     target_rtf: float = 1.0
@@ -114,6 +119,7 @@ class SimulationParams:
     monitor_x: int = -1
     monitor_y: int = -1
     seed: int = 0
+    sync_pybullet_every_step: bool = False
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(
