@@ -83,15 +83,18 @@ class BatteryPlugin(AgentPlugin):
         self.charge_rate = float(values["charge_rate"])
         self.charging = False
         self.distance = 0.0
+        self.used = 0.0
+        """SoC drawn by driving and by time so far (charging not subtracted; a flat battery
+        draws nothing)."""
 
     def on_step(self, dt: float) -> None:
         """Drain by the distance moved this step and by time; charge when charging."""
         moved = float(np.linalg.norm(self.agent.velocity)) * dt
         self.distance += moved
-        delta = -self.drain_per_meter * moved - self.drain_per_second * dt
-        if self.charging:
-            delta += self.charge_rate * dt
-        self.soc = min(1.0, max(0.0, self.soc + delta))
+        drain = self.drain_per_meter * moved + self.drain_per_second * dt
+        gain = self.charge_rate * dt if self.charging else 0.0
+        self.used += min(drain, self.soc + gain)
+        self.soc = min(1.0, max(0.0, self.soc + (gain - drain)))
 
 
 AGENT_PLUGIN_REGISTRY: dict[str, type[AgentPlugin]] = {"battery": BatteryPlugin}

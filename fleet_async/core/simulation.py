@@ -32,6 +32,7 @@ from fleet_async.core.collision import CollisionSystem
 from fleet_async.core.events import SimEvents
 from fleet_async.core.fleet import FleetMotion
 from fleet_async.core.joints import JointMotion
+from fleet_async.core.kpis import KpiCollector
 from fleet_async.core.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.monitor import DataMonitor, SimulationMonitor
 from fleet_async.core.params import SimulationParams
@@ -104,6 +105,7 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         )
         self._memory = MemoryProfiler(self._params.enable_memory_profiling)
         self._monitor: SimulationMonitor | None = None
+        self._kpis: KpiCollector | None = None
         self._phases: tuple[tuple[str, Callable[[], None]], ...] = (
             ("events_pre_step", self._phase_pre_step),
             ("callbacks", self._phase_callbacks),
@@ -200,6 +202,13 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
     def plugins(self) -> list[SimPlugin]:
         """Registered plugins, in registration order."""
         return list(self._plugins)
+
+    def kpis(self) -> KpiCollector:
+        """The fleet KPI collector (``.summary()``, ``.per_robot()``); it subscribes on the
+        first call and counts from then on, so call it before running."""
+        if self._kpis is None:
+            self._kpis = KpiCollector(self)
+        return self._kpis
 
     def body_mass(self, body_id: int, link: int = -1) -> float:
         """Mass (kg) PyBullet holds for one link of ``body_id`` (-1: the base); 0.0 for no

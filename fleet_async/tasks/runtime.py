@@ -187,6 +187,10 @@ class Runtime:
             notes = getattr(exc, "__notes__", [])
             if hasattr(exc, "add_note") and not any(n.startswith("in mission ") for n in notes):
                 exc.add_note(f"in mission {mission.name!r} at sim time {self.sim.sim_time:.3f} s")
+            if self.sim.events.has_handlers(SimEvents.MISSION_FAILED):  # e.g. sim.kpis()
+                self.sim.events.emit(
+                    SimEvents.MISSION_FAILED, sim=self.sim, mission=mission.name, error=exc
+                )
             raise
         finally:
             del self._missions[task]
