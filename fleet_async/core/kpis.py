@@ -40,12 +40,12 @@ _EPS_TIME = 1e-9  # s
 class FleetKpis:
     """The fleet's summary row for one run (see ``docs/sweeps.md`` for each definition).
 
-    Totals are over every robot counted; means divide a total by ``robots``. Times are in sim
+    Totals are over every robot counted; means divide a total by ``robot_count``. Times are in sim
     seconds, distances in metres, battery figures in state-of-charge units (1.0 = one full
     battery); battery fields are None when no robot has a battery.
     """
 
-    robots: int
+    robot_count: int
     steps: int
     sim_time_s: float
     tasks_completed: int
@@ -238,7 +238,7 @@ class KpiCollector:
         batteries = [r for r in robots if r.battery_used is not None]
         used = math.fsum(r.battery_used for r in batteries if r.battery_used is not None)
         return FleetKpis(
-            robots=n,
+            robot_count=n,
             steps=self._steps,
             sim_time_s=sim_time,
             tasks_completed=self._tasks[0],

@@ -55,7 +55,7 @@ def test_one_robot_moves_waits_and_idles(sim):
     assert (move.start_time, move.end_time) == (0.0, 2.0)
     assert (wait.start_time, wait.end_time) == (2.0, pytest.approx(3.0))
     row = kpis.summary()
-    assert (row.robots, row.steps, row.sim_time_s) == (1, 50, 50 * DT)
+    assert (row.robot_count, row.steps, row.sim_time_s) == (1, 50, 50 * DT)
     assert row.moving_time_total_s == 20 * DT
     assert row.waiting_time_total_s == 10 * DT
     assert row.idle_time_total_s == 20 * DT
@@ -78,7 +78,7 @@ def test_fleet_means_divide_by_robots(sim):
     a.add_action(MoveAction(path=Pose.from_xyz(2.0, 0.0, 0.1)))
     steps(sim, 30)
     row = kpis.summary()
-    assert row.robots == 2
+    assert row.robot_count == 2
     assert row.moving_time_total_s == 20 * DT and row.moving_time_mean_s == 20 * DT / 2
     assert row.idle_time_total_s == 40 * DT and row.idle_time_mean_s == 40 * DT / 2
     assert row.distance_mean_m == pytest.approx(1.0, abs=1e-12)
@@ -180,7 +180,7 @@ def test_removed_robot_keeps_its_figures(sim):
     assert details["a"].actions_cancelled == 1
     assert details["b"].idle_time_s == 13 * DT
     assert details["late"].idle_time_s == 3 * DT
-    assert kpis.summary().robots == 3 and b.sim_core is sim and late.sim_core is sim
+    assert kpis.summary().robot_count == 3 and b.sim_core is sim and late.sim_core is sim
 
 
 def test_counts_start_when_asked_and_stop_freezes(sim):
@@ -202,7 +202,7 @@ def test_no_robots_gives_zero_means(sim):
     kpis = sim.kpis()
     steps(sim, 3)
     row = kpis.summary()
-    assert row.robots == 0 and row.distance_mean_m == 0.0 and row.idle_time_mean_s == 0.0
+    assert row.robot_count == 0 and row.distance_mean_m == 0.0 and row.idle_time_mean_s == 0.0
     assert row.throughput_per_hour == 0.0 and kpis.per_robot() == []
 
 
