@@ -157,7 +157,8 @@ def plot_kpi(
     seeds = max(len(p.values) for points in lines.values() for p in points)
     failed = sum(row.get("error") not in (None, "") for row in rows)
     note = f", {failed} failed runs left out" if failed else ""
-    ax.set_title(title or f"{y} vs {x} (mean, 10-90% band, {seeds} seeds per point{note})")
+    detail = f"mean, 10-90% band and every run; {seeds} seeds per point{note}"
+    ax.set_title(title or f"{y} vs {x}\n{detail}", fontsize=10)
     ax.set_xlabel(x)
     ax.set_ylabel(y)
     ax.grid(True, alpha=0.3)
