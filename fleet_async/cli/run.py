@@ -20,6 +20,7 @@ from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
 from fleet_async.cli.tables import format_kpis, format_table
 from fleet_async.core import gui, runner
+from fleet_async.core.checkpoint import CheckpointError
 from fleet_async.core.config_utils import load_yaml_config
 from fleet_async.core.kpis import FleetKpis, RobotKpis
 from fleet_async.core.runner import steps_for
@@ -120,6 +121,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=15,
         metavar="N",
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
+    )
+    parser.add_argument(
+        "--save-state",
+        metavar="FILE",
+        help="after the run, save a checkpoint of it to FILE (sim.save_state), to branch a "
+        "sweep from: fleet-async sweep SCENARIO --checkpoint FILE",
     )
     parser.add_argument(
         "--per-robot",
@@ -315,6 +322,11 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     if bar is not None:
         bar.finish(sim.sim_time - sim_start)
     saved = sim.stop_recording() if args.record else None
+    if args.save_state:
+        try:
+            sim.save_state(args.save_state)
+        except CheckpointError as exc:
+            raise CliError(str(exc)) from exc
     if not args.quiet:
         steps = sim.step_count - start_step
         row = kpis.summary()

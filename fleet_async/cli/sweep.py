@@ -145,6 +145,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="worker processes of the pool / CPUs of a local Ray (default: one per core)",
     )
     parser.add_argument(
+        "--checkpoint",
+        metavar="FILE",
+        help="branch every run from this checkpoint (fleet-async run --save-state FILE, or "
+        "sim.save_state): restored into the freshly built scenario, reseeded with the run's "
+        "seed, then run for --duration",
+    )
+    parser.add_argument(
         "--per-robot",
         metavar="FILE",
         help="also write the per-robot table (one row per robot per run) to FILE",
@@ -258,6 +265,7 @@ def execute(args: argparse.Namespace) -> int:
             engine=engine,
             duration=args.duration,
             robots_out=args.per_robot,
+            checkpoint=args.checkpoint,
             on_progress=on_progress,
         )
     except (SweepKeyError, ValueError, ImportError, RuntimeError) as exc:

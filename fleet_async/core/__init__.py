@@ -18,6 +18,7 @@ from fleet_async.core.agent_manager import AgentManager
 from fleet_async.core.agent_params import AgentSpawnParams, IKParams
 from fleet_async.core.agent_plugins import AgentPlugin, BatteryPlugin
 from fleet_async.core.arm_actions import JointAction, PoseAction
+from fleet_async.core.checkpoint import CheckpointError
 from fleet_async.core.config_utils import (
     dataclass_from_dict,
     forward_spawn_params,
@@ -40,6 +41,7 @@ from fleet_async.core.controllers import (
 from fleet_async.core.events import EventBus, SimEvents
 from fleet_async.core.geometry import Path, Pose
 from fleet_async.core.grid_spawn import GridSpawnParams
+from fleet_async.core.kpis import FleetKpis, KpiCollector, RobotKpis
 from fleet_async.core.logging_utils import (
     LazyLogger,
     NamedLazyLogger,
@@ -92,6 +94,7 @@ __all__ = [
     "AgentPlugin",
     "AgentSpawnParams",
     "BatteryPlugin",
+    "CheckpointError",
     "CollisionDetectionMethod",
     "CollisionMode",
     "Controller",
@@ -103,10 +106,12 @@ __all__ = [
     "DropAction",
     "DropPhase",
     "EventBus",
+    "FleetKpis",
     "GridSpawnParams",
     "IKParams",
     "JointAction",
     "KinematicController",
+    "KpiCollector",
     "LazyLogger",
     "MotionMode",
     "MoveAction",
@@ -122,6 +127,7 @@ __all__ = [
     "PoseAction",
     "PosePhase",
     "RandomWalkController",
+    "RobotKpis",
     "ShapeParams",
     "SimEvents",
     "SimObject",

@@ -33,6 +33,16 @@ class AgentPlugin:
     def on_remove(self) -> None:
         """Called when the plugin is removed or its agent leaves the simulation."""
 
+    def get_state(self) -> dict[str, Any]:
+        """What ``sim.save_state`` keeps of this plugin: its attributes (objects of the
+        simulation are saved by id). Override both methods if some attribute cannot be pickled
+        or must not be restored."""
+        return dict(vars(self))
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
+        vars(self).update(state)
+
 
 class BatteryPlugin(AgentPlugin):
     """State of charge that drains with distance and time and refills while charging.

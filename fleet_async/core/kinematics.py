@@ -24,6 +24,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -226,6 +227,45 @@ class KinematicEngine:
         self.alpha[slot] = limits.max_angular_accel
         self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
         self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
+
+    # ----- checkpoints ----------------------------------------------------------------------
+
+    _COLUMNS = (
+        "row", "kind", "mode", "vmax", "amax", "wmax", "alpha", "p0", "p1", "axis", "q0", "q1",
+        "q_goal", "u", "du", "u_vmax", "u_amax", "theta", "sl_dot", "sl_theta", "sl_sin",
+        "carry", "lin_scalar", "ang_scalar", "cmd", "vel",
+    )  # fmt: skip
+
+    def get_state(self) -> dict[str, Any]:
+        """Every slot's motion: columns, paths, free slots (for ``sim.save_state``)."""
+        high = self._high
+        return {
+            "high": high,
+            "free": sorted(self._free),
+            "stopped": list(self._stopped),
+            "plans": list(self._plans[:high]),
+            "columns": {name: getattr(self, name)[:high].copy() for name in self._COLUMNS},
+        }
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state` onto an engine whose slots hold the same store rows.
+
+        Raises:
+            ValueError: if the slots hold other rows (a simulation built differently).
+        """
+        high = state["high"]
+        rows = state["columns"]["row"]
+        if high != self._high or not np.array_equal(rows, self.row[:high]):
+            raise ValueError(
+                f"the checkpoint's motion slots ({high}) drive other objects than this "
+                f"simulation's ({self._high}): build it from the same scenario"
+            )
+        for name, values in state["columns"].items():
+            getattr(self, name)[:high] = values
+        self._free = list(state["free"])
+        heapq.heapify(self._free)
+        self._stopped = list(state["stopped"])
+        self._plans[:high] = list(state["plans"])
 
     # ----- queries ------------------------------------------------------------------------
 

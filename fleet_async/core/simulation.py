@@ -17,6 +17,7 @@ Profiling (``return_profiling``), real-time pacing and the monitor wrap this loo
 from __future__ import annotations
 
 import logging
+import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -25,7 +26,7 @@ from typing import Any, Protocol
 import numpy as np
 import pybullet as p
 
-from fleet_async.core import gui
+from fleet_async.core import checkpoint, gui
 from fleet_async.core.attachments import AttachmentSet
 from fleet_async.core.backend import PyBulletBackend
 from fleet_async.core.collision import CollisionSystem
@@ -209,6 +210,43 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         if self._kpis is None:
             self._kpis = KpiCollector(self)
         return self._kpis
+
+    def save_state(self, path: str | os.PathLike[str]) -> None:
+        """Write a checkpoint of this kinematic simulation to ``path`` (between steps).
+
+        ``restore_state`` on a simulation built from the same scenario, in any process,
+        continues from it step for step identically. Missions, physics and per-object
+        callbacks are not captured: see ``fleet_async/core/checkpoint.py``.
+
+        Raises:
+            CheckpointError: naming what cannot be saved.
+        """
+        checkpoint.save(self, path, self._checkpoint_parts())
+
+    def restore_state(self, path: str | os.PathLike[str]) -> None:
+        """Bring this simulation, freshly built from the scenario a checkpoint was saved from
+        and not stepped yet, to the state ``save_state`` wrote to ``path``.
+
+        Raises:
+            CheckpointError: for a simulation built differently or already stepped, naming
+                the difference; for a file that is no checkpoint.
+        """
+        clock = checkpoint.restore(self, path, self._checkpoint_parts())
+        self._step_count, self._collision_count, self._paused = clock
+        self._initialized = True  # step_once must not zero the restored clock
+
+    def _checkpoint_parts(self) -> checkpoint.CheckpointParts:
+        return checkpoint.CheckpointParts(
+            self._step_count,
+            self._collision_count,
+            self._paused,
+            self._fleet.engine,
+            self._fleet.actions,
+            self._callbacks,
+            self._plugin_schedule,
+            self._collision,
+            self._joint_motion,
+        )
 
     def body_mass(self, body_id: int, link: int = -1) -> float:
         """Mass (kg) PyBullet holds for one link of ``body_id`` (-1: the base); 0.0 for no

@@ -101,6 +101,7 @@ def run_sweep(
     engine: Engine | None = None,
     duration: float | None = None,
     robots_out: str | Path | None = None,
+    checkpoint: str | Path | None = None,
     on_progress: Callable[[SweepProgress], None] | None = None,
 ) -> SweepSummary:
     """Run every (grid point, seed) of ``plan`` on ``scenario``; write the table to ``out``.
@@ -115,6 +116,10 @@ def run_sweep(
         engine: Where runs execute (default: a :class:`PoolEngine`, one worker per core).
         duration: Sim seconds per run (default: the scenario's).
         robots_out: Also write the per-robot table here.
+        checkpoint: Branch every run from this checkpoint (``sim.save_state``): each run
+            builds the scenario, restores it, reseeds the generator with its seed and runs
+            ``duration`` more sim seconds. Workers read the file: on a cluster, it must be at
+            the same path on every node.
         on_progress: Called with a :class:`SweepProgress` once at the start and after each run.
 
     Returns:
@@ -139,8 +144,9 @@ def run_sweep(
         if robots_out is not None
         else None
     )
+    start = None if checkpoint is None else str(Path(checkpoint).resolve())
     todo = [
-        RunSpec(index, point, seed, scenario, duration, robots_table is not None)
+        RunSpec(index, point, seed, scenario, duration, robots_table is not None, start)
         for index, point, seed in runs
         if index not in done
     ]

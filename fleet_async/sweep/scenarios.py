@@ -22,6 +22,8 @@ from collections.abc import Awaitable, Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from fleet_async.core import MultiRobotSimulationCore, SimEvents, load_yaml_config
 from fleet_async.core.runner import steps_for
 from fleet_async.sweep.overrides import (
@@ -252,6 +254,8 @@ class RunSpec:
         duration: Sim seconds to run; None: the scenario's ``simulation.duration`` (or, with a
             main mission, until it returns).
         per_robot: Also return the per-robot table.
+        checkpoint: Branch from this checkpoint (``sim.save_state``): restore it into the
+            freshly built simulation and reseed its generator with ``seed`` before running.
     """
 
     index: int
@@ -260,6 +264,7 @@ class RunSpec:
     scenario: Scenario
     duration: float | None = None
     per_robot: bool = False
+    checkpoint: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -350,6 +355,9 @@ def execute_run(spec: RunSpec) -> RunResult:
     try:
         sim, main = spec.scenario.build(spec.params, spec.seed)
         try:
+            if spec.checkpoint is not None:
+                sim.restore_state(spec.checkpoint)
+                sim.rng = np.random.default_rng(spec.seed)  # branches differ from here on
             kpis, robots = _run_built(sim, main, spec)
         finally:
             sim.close()

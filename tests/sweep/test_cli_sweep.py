@@ -90,6 +90,33 @@ def test_sweep_writes_the_table_and_the_plot(script, scenario, tmp_path):
     assert again.returncode == 0 and "0 ran on inline, 4 were already in" in again.stdout
 
 
+def test_a_sweep_branches_from_a_run_saved_with_save_state(script, scenario, tmp_path):
+    warm = tmp_path / "warm.ckpt"
+    saved = cli(script, "run", scenario, "--duration", "0.5", "--save-state", warm, "--quiet")
+    assert saved.returncode == 0, saved.stderr
+    out = tmp_path / "branches.csv"
+    result = cli(
+        script,
+        "sweep",
+        scenario,
+        "--checkpoint",
+        warm,
+        "--duration",
+        "1",
+        "--seeds",
+        "0:2",
+        "--engine",
+        "inline",
+        "--out",
+        out,
+    )
+    assert result.returncode == 0, result.stderr
+    rows = read_table(out)
+    assert [r["steps"] for r in rows] == ["10", "10"]
+    # 0.5 s of the 1 m move happened before the checkpoint: this branch drives the rest.
+    assert float(rows[0]["distance_total_m"]) < 1.0
+
+
 def test_an_unknown_key_names_it_and_the_valid_ones(script, scenario, tmp_path):
     result = cli(script, "sweep", scenario, "--set", "entities.r0.controler.type=omni")
     assert result.returncode == 2

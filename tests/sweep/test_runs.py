@@ -133,3 +133,25 @@ def test_errors_read_the_same_in_every_process():
 def test_yaml_scenario_round_trips_through_pickle(tiny):
     copy = pickle.loads(pickle.dumps(tiny))
     assert copy.config == yaml.safe_load(TINY) and copy.base_dir == tiny.base_dir
+
+
+def test_runs_branch_from_a_checkpoint(tmp_path):
+    from tests.sweep.sweep_scenarios import steps_only
+
+    warm = steps_only(0, speed=1.0)  # drives 1 m; 6 steps in, it is under way
+    for _ in range(6):
+        warm.step_once()
+    warm.save_state(tmp_path / "warm.ckpt")
+    warm.close()
+    scenario = FunctionScenario(ref("steps_only"))
+    checkpoint = str(tmp_path / "warm.ckpt")
+    branch = execute_run(RunSpec(0, {}, 0, scenario, duration=1.0, checkpoint=checkpoint))
+    fresh = execute_run(RunSpec(0, {}, 0, scenario, duration=1.0))
+    assert branch.error is None and branch.kpis["steps"] == 10
+    assert branch.kpis["distance_total_m"] < fresh.kpis["distance_total_m"]  # the rest of 1 m
+    wrong = execute_run(
+        RunSpec(0, {}, 1, FunctionScenario(ref("random_fleet")), 1.0, False, checkpoint)
+    )
+    assert wrong.error.startswith(
+        "CheckpointError: restore_state: this simulation has other objects"
+    )
