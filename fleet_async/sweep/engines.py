@@ -113,10 +113,11 @@ class PoolEngine(Engine):
         suspects: list[RunSpec] = []
         interrupted = False
         try:
-            # At most two runs queued per worker: a stopped sweep leaves little to cancel.
+            # One run queued beyond the busy workers: enough to keep them busy, and little for
+            # a stopped sweep to wait for (the pool hands queued runs to its workers early).
             queue = list(reversed(specs))
             while queue or pending:
-                while queue and not suspects and len(pending) < 2 * workers:
+                while queue and not suspects and len(pending) < workers + 1:
                     spec = queue.pop()
                     pending[pool.submit(execute_run, spec)] = spec
                 try:
@@ -129,8 +130,8 @@ class PoolEngine(Engine):
                     for future in [f for f in pending if f.cancel()]:
                         del pending[future]
                     logger.warning(
-                        "interrupted: finishing the %d runs in progress (Ctrl+C again to stop "
-                        "at once)",
+                        "interrupted: finishing the %d runs already started (Ctrl+C again to "
+                        "stop at once)",
                         len(pending),
                     )
                     continue
