@@ -194,6 +194,7 @@ class KpiCollector:
         self._moving = np.zeros(16, dtype=np.int64)
         self._waiting = np.zeros(16, dtype=np.int64)
         self._live_count = 0
+        self._linked = True  # the live selectors below are up to date
         self._live_index: slice | np.ndarray = slice(0, 0)
         self._live_rows: slice | np.ndarray = slice(0, 0)
         self._handlers: dict[str, Callable[..., Any]] = {
@@ -278,7 +279,7 @@ class KpiCollector:
         self._by_id[id(agent)] = robot
         if index >= len(self._busy):
             self._grow(2 * len(self._busy))
-        self._relink()
+        self._linked = False  # rebuilt before the next step: a spawn of N robots costs O(N)
 
     def _grow(self, capacity: int) -> None:
         for name in ("_busy", "_ended", "_speed_sum", "_moving", "_waiting"):
@@ -314,7 +315,7 @@ class KpiCollector:
         robot.agent = None
         robot.left_step = self._steps
         self._busy[robot.index] = False
-        self._relink()
+        self._linked = False
 
     # ----- events ---------------------------------------------------------------------------
 
@@ -374,6 +375,9 @@ class KpiCollector:
 
     def _on_step(self, **_: Any) -> None:
         self._steps += 1
+        if not self._linked:
+            self._relink()
+            self._linked = True
         if not self._live_count:
             return
         store = self._sim.state
