@@ -19,10 +19,7 @@ from pathlib import Path
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
 from fleet_async.cli.tables import format_kpis, format_table
-from fleet_async.core import gui, runner
-from fleet_async.core.checkpoint import CheckpointError
-from fleet_async.core.config_utils import load_yaml_config
-from fleet_async.core.kpis import FleetKpis, RobotKpis
+from fleet_async.core import CheckpointError, FleetKpis, RobotKpis, gui, load_yaml_config, runner
 from fleet_async.core.runner import steps_for
 from fleet_async.core.scenario import SCENARIO_SECTIONS
 from fleet_async.core.simulation import MultiRobotSimulationCore

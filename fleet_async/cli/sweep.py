@@ -15,7 +15,7 @@ from typing import Any
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import RunsProgressBar
 from fleet_async.cli.run import INTERRUPTED_EXIT_CODE
-from fleet_async.core.kpis import FleetKpis
+from fleet_async.core import FleetKpis
 from fleet_async.sweep import (
     ENGINES,
     Engine,

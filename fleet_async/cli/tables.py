@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from fleet_async.core.kpis import FleetKpis
+from fleet_async.core import FleetKpis
 
 __all__ = ["format_kpis", "format_table", "format_value"]
 

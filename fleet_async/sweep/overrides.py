@@ -22,7 +22,7 @@ import difflib
 from collections.abc import Mapping
 from typing import Any
 
-from fleet_async.core.params import SimulationParams
+from fleet_async.core import SimulationParams
 from fleet_async.core.scenario import SCENARIO_SECTIONS
 
 __all__ = ["SweepKeyError", "apply_overrides", "is_nested", "settable_keys", "unshared"]

@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from fleet_async.core.kpis import FleetKpis, RobotKpis
+from fleet_async.core import FleetKpis, RobotKpis
 from fleet_async.sweep.engines import Engine, PoolEngine
 from fleet_async.sweep.grid import SweepPlan
 from fleet_async.sweep.overrides import SweepKeyError
