@@ -101,14 +101,21 @@ def error_line(stderr: str) -> str:
 def test_help_names_every_subcommand(script):
     result = cli(script, "--help")
     assert result.returncode == 0, result.stderr
-    for command in ("run", "examples", "bench"):
+    for command in ("run", "sweep", "examples", "bench"):
         assert f"\n  {command} " in result.stdout
 
 
 @pytest.mark.parametrize(
     ("command", "options"),
     [
-        ("run", ["--duration", "--gui", "--rtf", "--record", "--record-size", "--quiet"]),
+        (
+            "run",
+            ["--duration", "--gui", "--rtf", "--record", "--record-size", "--per-robot", "--quiet"],
+        ),
+        (
+            "sweep",
+            ["--seeds", "--set", "--out", "--engine", "--address", "--workers", "--plot", "--keys"],
+        ),
         ("examples", ["--list", "--run", "--copy"]),
         ("bench", ["--n", "--large", "--json", "--profile"]),
     ],
@@ -148,6 +155,19 @@ def test_run_prints_the_summary(script, scenario):
     assert summary["actions failed"] == "0"
     assert summary["collisions"] == "0"
     assert "recording" not in summary
+
+
+def test_run_prints_the_fleet_kpis_and_per_robot_detail(script, scenario):
+    result = cli(script, "run", scenario, "--per-robot")
+    assert result.returncode == 0, result.stderr
+    kpis = result.stdout.split("fleet KPIs")[1].split("per robot:")[0]
+    values = dict(line.split() for line in kpis.splitlines()[1:] if line.strip())
+    assert values["robot_count"] == "2" and values["steps"] == "100"
+    assert values["actions_completed"] == "4" and values["distance_total_m"] == "2"
+    assert values["battery_used_total"] == "-"  # no robot has a battery
+    table = result.stdout.split("per robot:\n")[1].splitlines()
+    assert table[0].split()[:3] == ["robot", "object_id", "distance_m"]
+    assert [line.split()[0] for line in table[1:]] == ["r0", "r1"]
 
 
 def test_run_duration_option_overrides_the_scenario(script, scenario):

@@ -1,9 +1,9 @@
-"""The ``fleet-async`` command: run scenarios, try the examples, benchmark the simulator.
+"""The ``fleet-async`` command: run scenarios, sweep them, try the examples, benchmark.
 
 ``main`` parses the command line and hands it to the subcommand's module (``run``,
-``examples``; ``bench`` is :mod:`fleet_async.bench`). A subcommand reports a problem the user
-can fix by raising :class:`CliError`, which ``main`` prints as ``fleet-async: error: <message>``
-(no traceback) with the error's exit code.
+``sweep``, ``examples``; ``bench`` is :mod:`fleet_async.bench`). A subcommand reports a problem
+the user can fix by raising :class:`CliError`, which ``main`` prints as
+``fleet-async: error: <message>`` (no traceback) with the error's exit code.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import fleet_async
 from fleet_async import bench
-from fleet_async.cli import examples, run
+from fleet_async.cli import examples, run, sweep
 from fleet_async.cli.errors import CliError
 
 __all__ = ["CliError", "build_parser", "main"]
@@ -26,7 +26,9 @@ fleet_async: a kinematics-first multi-robot fleet simulator on PyBullet.
 
 subcommands:
   run       build a scenario from its YAML file and run it headless, then print a summary
-            (robots, sim time, steps, real-time factor, actions, collisions)
+            and the fleet KPIs (actions, tasks, distance, idle / waiting time, collisions)
+  sweep     run a scenario over a parameter grid and seeds, on a process pool or Ray, into
+            one table of fleet KPIs (CSV or Parquet), optionally plotted
   examples  list the bundled examples, run one, or copy them into a folder to edit
   bench     run the fleet-scale benchmark: step time, real-time factor, spawn time and
             memory per agent for fleets of N robots
@@ -58,6 +60,19 @@ def _add_run(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     run.add_arguments(parser)
     parser.set_defaults(handler=run.execute)
+
+
+def _add_sweep(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = subparsers.add_parser(
+        "sweep",
+        help="run a scenario over a parameter grid and seeds into a table of fleet KPIs",
+        description="Run SCENARIO once per (grid point, seed): the grid is every combination "
+        "of the\n--set values. Each run is one row of fleet KPIs in the --out table.",
+        epilog=sweep.EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sweep.add_arguments(parser)
+    parser.set_defaults(handler=sweep.execute)
 
 
 def _add_examples(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -112,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
     subparsers.required = True
     _add_run(subparsers)
+    _add_sweep(subparsers)
     _add_examples(subparsers)
     _add_bench(subparsers)
     return parser

@@ -15,19 +15,18 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
+from fleet_async.cli.tables import format_kpis, format_table
+from fleet_async.core import CheckpointError, FleetKpis, RobotKpis
 from fleet_async.core.base.config_utils import load_yaml_config
-from fleet_async.core.base.events import SimEvents
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
 
 __all__ = [
-    "ActionTally",
     "RunSummary",
     "add_arguments",
     "execute",
@@ -123,6 +122,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
     )
     parser.add_argument(
+        "--save-state",
+        metavar="FILE",
+        help="after the run, save a checkpoint of it to FILE (sim.save_state), to branch a "
+        "sweep from: fleet-async sweep SCENARIO --checkpoint FILE",
+    )
+    parser.add_argument(
+        "--per-robot",
+        action="store_true",
+        help="after the fleet KPIs, print one line of figures per robot",
+    )
+    parser.add_argument(
         "--quiet",
         action="store_true",
         help="print nothing (no progress bar, no summary); errors still go to stderr",
@@ -187,22 +197,6 @@ def run_steps(sim: MultiRobotSimulationCore, steps: int, on_frame: Callable[[], 
         on_frame()
 
     return runner.run_steps(sim, steps, frame)
-
-
-class ActionTally:
-    """Counts ``ACTION_COMPLETED`` and ``ACTION_FAILED`` events of a simulation."""
-
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
-        self.completed = 0
-        self.failed = 0
-        sim.events.on(SimEvents.ACTION_COMPLETED, self._on_completed)
-        sim.events.on(SimEvents.ACTION_FAILED, self._on_failed)
-
-    def _on_completed(self, **_: Any) -> None:
-        self.completed += 1
-
-    def _on_failed(self, **_: Any) -> None:
-        self.failed += 1
 
 
 # ----- the summary ----------------------------------------------------------------------------
@@ -301,7 +295,7 @@ def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) ->
 
 def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
     duration = _duration(sim, path, args.duration)
-    tally = ActionTally(sim)
+    kpis = sim.kpis()
     if args.record:
         _start_recording(sim, args)
     if args.gui:
@@ -327,15 +321,25 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     if bar is not None:
         bar.finish(sim.sim_time - sim_start)
     saved = sim.stop_recording() if args.record else None
+    if args.save_state:
+        try:
+            sim.save_state(args.save_state)
+        except CheckpointError as exc:
+            raise CliError(str(exc)) from exc
     if not args.quiet:
         steps = sim.step_count - start_step
-        print(format_summary(_summarize(sim, tally, steps, wall, saved, interrupted)))
+        row = kpis.summary()
+        print(format_summary(_summarize(sim, row, steps, wall, saved, interrupted)))
+        print(f"\nfleet KPIs (sim time; the row 'fleet-async sweep' records):\n{format_kpis(row)}")
+        if args.per_robot:
+            robots = [r.as_dict() for r in kpis.per_robot()]
+            print(f"\nper robot:\n{format_table(robots, RobotKpis.columns())}")
     return INTERRUPTED_EXIT_CODE if interrupted else 0
 
 
 def _summarize(
     sim: MultiRobotSimulationCore,
-    tally: ActionTally,
+    row: FleetKpis,
     steps: int,
     wall: float,
     recording: str | None,
@@ -348,8 +352,8 @@ def _summarize(
         sim_time=sim.sim_time,
         steps=steps,
         wall_time=wall,
-        actions_completed=tally.completed,
-        actions_failed=tally.failed,
+        actions_completed=row.actions_completed,
+        actions_failed=row.actions_failed,
         collisions=sim.collision_count,
         recording=recording,
         interrupted=interrupted,

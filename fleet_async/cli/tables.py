@@ -1,0 +1,44 @@
+"""Plain-text tables for the terminal: a KPI row as ``name value`` lines, rows as columns."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from fleet_async.core import FleetKpis
+
+__all__ = ["format_kpis", "format_table", "format_value"]
+
+
+def format_value(value: Any) -> str:
+    """A cell: floats to 6 significant digits, None as ``-``, the rest as ``str``."""
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def format_kpis(row: FleetKpis, indent: str = "  ") -> str:
+    """One ``column  value`` line per KPI, names as in a sweep's table."""
+    values = row.as_dict()
+    width = max(len(name) for name in values)
+    return "\n".join(f"{indent}{name:<{width}}  {format_value(v)}" for name, v in values.items())
+
+
+def format_table(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
+    """``rows`` as right-aligned columns under a header (text columns left-aligned)."""
+    cells = [[format_value(row.get(c)) for c in columns] for row in rows]
+    widths = [max([len(c), *(len(r[i]) for r in cells)]) for i, c in enumerate(columns)]
+    numeric = [
+        all(isinstance(row.get(c), (int, float)) or row.get(c) is None for row in rows)
+        for c in columns
+    ]
+
+    def line(values: Sequence[str]) -> str:
+        return "  ".join(
+            v.rjust(w) if num else v.ljust(w)
+            for v, w, num in zip(values, widths, numeric, strict=True)
+        ).rstrip()
+
+    return "\n".join([line(columns), *(line(r) for r in cells)])
