@@ -2,8 +2,9 @@
 
 Its sub-packages are layers that import only downward at run time, from ``base`` up through
 ``geometry``, ``world``, ``collision``, ``bodies``, ``motion``, ``actions``, ``missions``,
-``agents``, ``sim`` and ``managers`` to ``scenario`` and ``view``; ``simulation.py`` assembles
-``MultiRobotSimulationCore`` on top (docs/architecture.md). Nothing in ``fleet_async.core``
+``agents``, ``sim``, ``metrics`` and ``checkpoint``, and ``managers`` to ``scenario`` and
+``view``; ``simulation.py`` assembles ``MultiRobotSimulationCore`` on top
+(docs/architecture.md). Nothing in ``fleet_async.core``
 imports ``fleet_async.tasks``; the async mission layer sits on top of this package, reaches it
 through ``fleet_async.core.missions``, and never inside it.
 """
@@ -61,11 +62,14 @@ from fleet_async.core.bodies.models import (
 )
 from fleet_async.core.bodies.sim_object import ObjectRemovedError, SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.checkpoint.format import CheckpointError
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.managers.sim_object_manager import SimObjectManager, register_entity_class
+from fleet_async.core.metrics.kpis import KpiCollector
+from fleet_async.core.metrics.rows import FleetKpis, RobotKpis
 from fleet_async.core.motion.controllers import (
     Controller,
     ControllerParams,
@@ -98,6 +102,7 @@ __all__ = [
     "AgentPlugin",
     "AgentSpawnParams",
     "BatteryPlugin",
+    "CheckpointError",
     "CollisionDetectionMethod",
     "CollisionMode",
     "Controller",
@@ -109,10 +114,12 @@ __all__ = [
     "DropAction",
     "DropPhase",
     "EventBus",
+    "FleetKpis",
     "GridSpawnParams",
     "IKParams",
     "JointAction",
     "KinematicController",
+    "KpiCollector",
     "LazyLogger",
     "MotionMode",
     "MoveAction",
@@ -129,6 +136,7 @@ __all__ = [
     "PoseAction",
     "PosePhase",
     "RandomWalkController",
+    "RobotKpis",
     "ShapeParams",
     "SimEvents",
     "SimObject",

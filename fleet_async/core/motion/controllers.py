@@ -127,6 +127,16 @@ class Controller:
     def compute(self, agent: Agent, dt: float) -> None:
         """Advance this controller for one step of ``dt`` seconds."""
 
+    def get_state(self) -> dict[str, Any]:
+        """What ``sim.save_state`` keeps of this controller: its attributes (objects of the
+        simulation are saved by id). Override both methods if some attribute cannot be pickled
+        or must not be restored."""
+        return dict(vars(self))
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
+        vars(self).update(state)
+
     @property
     def is_base(self) -> bool:
         """Whether this controller moves the agent (index 0 of the chain)."""

@@ -24,6 +24,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -47,6 +48,21 @@ KIND_DIFFERENTIAL = 1
 _IDLE, _VELOCITY, _POSE = 0, 1, 2
 _NONE, _TURNED, _DRIVING = 0, 1, 2  # progress toward the plan's next waypoint
 
+_SCALARS = ("u", "du", "u_vmax", "u_amax", "theta", "sl_dot", "sl_theta", "sl_sin", "carry")
+_COLUMNS: dict[str, tuple[tuple[int, ...], type, float]] = {
+    "row": ((), np.int64, -1),
+    "kind": ((), np.int8, 0),
+    "mode": ((), np.int8, _IDLE),
+    **dict.fromkeys(("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"), ((3,), np.float64, 0.0)),
+    **dict.fromkeys(("q0", "q1", "q_goal"), ((4,), np.float64, 0.0)),
+    **dict.fromkeys(_SCALARS, ((), np.float64, 0.0)),
+    "lin_scalar": ((), np.bool_, True),
+    "ang_scalar": ((), np.bool_, True),
+    "cmd": ((4,), np.float64, 0.0),  # body-frame vx, vy, vz, wz
+    "vel": ((4,), np.float64, 0.0),  # current body-frame velocity in VELOCITY mode
+}
+"""Per-slot columns of the engine: name -> (shape of one slot's entry, dtype, fill value)."""
+
 
 @dataclass
 class _Plan:
@@ -68,7 +84,7 @@ class KinematicEngine:
             finished its path, False when stopped or replaced.
     """
 
-    # Per-slot columns, grown together by _alloc (see there for shapes).
+    # Per-slot columns, grown together by _alloc (shapes and dtypes in _COLUMNS).
     row: np.ndarray
     kind: np.ndarray
     mode: np.ndarray
@@ -108,36 +124,12 @@ class KinematicEngine:
     # ----- slots --------------------------------------------------------------------------
 
     def _alloc(self, cap: int) -> None:
-        def grow(name: str, shape: tuple[int, ...], dtype: type, fill: float) -> None:
+        for name, (shape, dtype, fill) in _COLUMNS.items():
             new: np.ndarray = np.full((cap, *shape), fill, dtype=dtype)
             old = getattr(self, name, None)
             if old is not None:
                 new[: len(old)] = old
             setattr(self, name, new)
-
-        grow("row", (), np.int64, -1)
-        grow("kind", (), np.int8, 0)
-        grow("mode", (), np.int8, _IDLE)
-        for name in ("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"):
-            grow(name, (3,), np.float64, 0.0)
-        for name in ("q0", "q1", "q_goal"):
-            grow(name, (4,), np.float64, 0.0)
-        for name in (
-            "u",
-            "du",
-            "u_vmax",
-            "u_amax",
-            "theta",
-            "sl_dot",
-            "sl_theta",
-            "sl_sin",
-            "carry",
-        ):
-            grow(name, (), np.float64, 0.0)
-        grow("lin_scalar", (), np.bool_, True)
-        grow("ang_scalar", (), np.bool_, True)
-        grow("cmd", (4,), np.float64, 0.0)  # body-frame vx, vy, vz, wz
-        grow("vel", (4,), np.float64, 0.0)  # current body-frame velocity in VELOCITY mode
         self._plans.extend([None] * (cap - len(self._plans)))
 
     def add(self, row: int, kind: int, limits: MotionLimits) -> int:
@@ -173,6 +165,39 @@ class KinematicEngine:
         self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
         self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
 
+    # ----- checkpoints ----------------------------------------------------------------------
+
+    def get_state(self) -> dict[str, Any]:
+        """Every slot's motion: columns, paths, free slots (for ``sim.save_state``)."""
+        high = self._high
+        return {
+            "high": high,
+            "free": sorted(self._free),
+            "stopped": list(self._stopped),
+            "plans": list(self._plans[:high]),
+            "columns": {name: getattr(self, name)[:high].copy() for name in _COLUMNS},
+        }
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state` onto an engine whose slots hold the same store rows.
+
+        Raises:
+            ValueError: if the slots hold other rows (a simulation built differently).
+        """
+        high = state["high"]
+        rows = state["columns"]["row"]
+        if high != self._high or not np.array_equal(rows, self.row[:high]):
+            raise ValueError(
+                f"the checkpoint's motion slots ({high}) drive other objects than this "
+                f"simulation's ({self._high}): build it from the same scenario"
+            )
+        for name, values in state["columns"].items():
+            getattr(self, name)[:high] = values
+        self._free = list(state["free"])
+        heapq.heapify(self._free)
+        self._stopped = list(state["stopped"])
+        self._plans[:high] = list(state["plans"])
+
     # ----- queries ------------------------------------------------------------------------
 
     def is_moving(self, slot: int) -> bool:
@@ -199,14 +224,8 @@ class KinematicEngine:
         plan = self._plans[slot]
         if plan is None:
             return None
-        return Pose.from_arrays_unchecked(
-            self._plan_goal_position(slot, plan), plan.final_orientation.copy()
-        )
-
-    def _plan_goal_position(self, slot: int, plan: _Plan) -> np.ndarray:
-        if plan.waypoints:
-            return plan.waypoints[-1].position.copy()
-        return self.p1[slot].copy()
+        position = plan.waypoints[-1].position if plan.waypoints else self.p1[slot]
+        return Pose.from_arrays_unchecked(position.copy(), plan.final_orientation.copy())
 
     # ----- commands -----------------------------------------------------------------------
 
