@@ -10,7 +10,9 @@ run of its own. The scenario names this file's ``shift`` as its mission (its ``m
 section), so ``fleet-async run`` runs the same shift as this script. ``shift`` is a dispatcher:
 it starts one mission per picker. Each picker takes the next order from the shared order list,
 picks the tote at the shelf, drives to its station through a cross aisle, drops the tote there
-and comes back for more; a supervisor mission reports progress every 20 s of sim time.
+and comes back for more; a supervisor mission reports progress every 20 s of sim time. Each
+order is a task: its delivery (or giving up on it) is a TASK_COMPLETED (TASK_FAILED) event,
+which the fleet KPIs count (the run summary's 'tasks completed', a sweep's throughput).
 Everything happens in sim time: the step loop advances only when every mission is waiting, so
 the run is deterministic and much faster than real time.
 """
@@ -27,6 +29,7 @@ from fleet_async import (
     Agent,
     MultiRobotSimulationCore,
     Pose,
+    SimEvents,
     SimObject,
     load_yaml_config,
 )
@@ -114,9 +117,13 @@ async def run_shift(
                 filled[order.station] += 1
                 await robot.drop(station_pose(order.station, slot), approach_offset=0.8)
                 tally["delivered"] += 1
+                # An order is a task: the fleet KPIs (sim.kpis(), fleet-async run / sweep)
+                # count these events as tasks completed / failed.
+                sim.events.emit(SimEvents.TASK_COMPLETED, sim=sim, agent=robot, task=order)
                 say(f"{robot.name} delivered order {order.number} to station {order.station}")
             except ActionFailedError as exc:
                 tally["failed"] += 1
+                sim.events.emit(SimEvents.TASK_FAILED, sim=sim, agent=robot, task=order)
                 say(f"{robot.name} gave up on order {order.number}: {exc.action.error_message}")
         await robot.move([*via_cross_aisle(robot, PICK_LANE), home])
         say(f"{robot.name} is back at the dock")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -14,6 +15,7 @@ import pytest
 from PIL import Image
 
 import fleet_async
+from fleet_async import FleetKpis
 from fleet_async.cli import main
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar, format_progress
@@ -101,14 +103,21 @@ def error_line(stderr: str) -> str:
 def test_help_names_every_subcommand(script):
     result = cli(script, "--help")
     assert result.returncode == 0, result.stderr
-    for command in ("run", "examples", "bench"):
+    for command in ("run", "sweep", "examples", "bench"):
         assert f"\n  {command} " in result.stdout
 
 
 @pytest.mark.parametrize(
     ("command", "options"),
     [
-        ("run", ["--duration", "--gui", "--rtf", "--record", "--record-size", "--quiet"]),
+        (
+            "run",
+            ["--duration", "--gui", "--rtf", "--record", "--record-size", "--per-robot", "--quiet"],
+        ),
+        (
+            "sweep",
+            ["--seeds", "--set", "--out", "--engine", "--address", "--workers", "--plot", "--keys"],
+        ),
         ("examples", ["--list", "--run", "--copy"]),
         ("bench", ["--n", "--large", "--json", "--profile"]),
     ],
@@ -173,6 +182,22 @@ def test_run_prints_the_summary(script, scenario):
     # Each count says what it counts.
     assert "collisions:        0 (contacts that began" in result.stdout
     assert "objects:           3 (every sim object, robots included)" in result.stdout
+
+
+def test_run_prints_the_fleet_kpis_in_the_summary_and_per_robot_detail(script, scenario):
+    result = cli(script, "run", scenario, "--per-robot")
+    assert result.returncode == 0, result.stderr
+    block, table = result.stdout.split("\n\nper robot:\n")
+    # One block: every line is 'name: value', the KPIs among the run's figures.
+    assert all(": " in line for line in block.splitlines()), block
+    summary = summary_of(block)
+    assert (summary["robots"], summary["steps"], summary["actions completed"]) == ("2", "100", "4")
+    assert summary["distance"] == "2.0 m" and summary["tasks completed"] == "0"
+    assert summary["battery used"] == "-"  # no robot has a battery
+    assert "distance:          2.0 m (driven, summed over 2 robots; 1.0 m per robot)" in block
+    rows = table.splitlines()
+    assert rows[0].split()[:3] == ["robot", "object_id", "distance_m"]
+    assert [line.split()[0] for line in rows[1:]] == ["r0", "r1"]
 
 
 def test_run_duration_option_overrides_the_scenario(script, scenario):
@@ -336,6 +361,57 @@ def test_summary_lines():
         "stopped:           why",
         "recording:         out.gif",
     ]
+
+
+KPIS = FleetKpis(
+    robot_count=3, steps=100, sim_time_s=10.0, tasks_completed=2, tasks_failed=1,
+    throughput_per_hour=720.0, actions_completed=4, actions_failed=2, actions_cancelled=1,
+    distance_total_m=6.0, distance_mean_m=2.0, moving_time_total_s=12.0,
+    moving_time_mean_s=4.0, waiting_time_total_s=9.0, waiting_time_mean_s=3.0,
+    idle_time_total_s=9.0, idle_time_mean_s=3.0, collisions=3, mission_errors=0,
+    battery_robots=2, battery_used_total=0.5, battery_used_mean=0.25, battery_min_soc=0.7,
+)  # fmt: skip
+
+
+def test_summary_lines_with_the_fleet_kpis():
+    summary = RunSummary(2, 3, 10.0, 100, 0.5, 4, 2, 3, missions=1, stopped="why", kpis=KPIS)
+    assert format_summary(summary).splitlines() == [
+        "robots:            2 (agents at the end; the figures below count 3, those removed "
+        "during the run too)",
+        "objects:           3 (every sim object, robots included)",
+        "sim time:          10.000 s",
+        "steps:             100",
+        "wall time:         0.500 s",
+        "real-time factor:  20.0x",
+        "missions:          1 (the scenario's missions: entries)",
+        "actions completed: 4",
+        "actions failed:    2 (failed or cancelled; 1 of them cancelled)",
+        "collisions:        3 (contacts that began: each time two objects started to touch)",
+        "tasks completed:   2 (TASK_COMPLETED events: work reported done)",
+        "tasks failed:      1 (TASK_FAILED events)",
+        "throughput:        720.0 tasks completed per hour of sim time",
+        "distance:          6.0 m (driven, summed over 3 robots; 2.0 m per robot)",
+        "moving time:       12.0 s (summed over 3 robots; 4.0 s per robot)",
+        "waiting time:      9.0 s (standing with an action in progress, summed over 3 robots; "
+        "3.0 s per robot)",
+        "idle time:         9.0 s (standing with no action, summed over 3 robots; 3.0 s per robot)",
+        "mission errors:    0 (exceptions that ended a mission)",
+        "battery used:      0.500 full batteries (summed over 2 robots with one; 0.250 per "
+        "robot; lowest charge left 0.70)",
+        "stopped:           why",
+    ]
+
+
+def test_summary_robots_leave_out_devices():
+    summary = RunSummary(2, 9, 10.0, 100, 0.5, 4, 1, 3, devices=3)
+    assert format_summary(summary).splitlines()[0] == (
+        "robots:            2 (agents; 3 more are devices, not robots)"
+    )
+    one_removed = dataclasses.replace(summary, kpis=dataclasses.replace(KPIS, robot_count=3))
+    assert format_summary(one_removed).splitlines()[0] == (
+        "robots:            2 (agents at the end; the figures below count 3, those removed "
+        "during the run too; 3 more are devices, not robots)"
+    )
 
 
 # ----- the progress bar -----------------------------------------------------------------------

@@ -2,11 +2,11 @@
 
 Sub-packages of the core import only downward at run time: an import inside a function counts
 as much as one at the top of a module. Imports under ``if TYPE_CHECKING:`` may point anywhere.
-Sub-packages on one floor (``scenario`` and ``view``) do not import each other. Above the
-layers stand the public simulation class (``core/simulation.py``), then ``fleet_async.core``
-itself; the seed-module facades (``fleet_async.agent``, ...) stand above everything, so nothing
-in the package imports them. ``fleet_async.tasks`` reaches the core only through the mission
-seam, ``fleet_async.core.missions``.
+Sub-packages on one floor (``metrics`` and ``checkpoint``; ``scenario`` and ``view``) do not
+import each other. Above the layers stand the public simulation class (``core/simulation.py``),
+then ``fleet_async.core`` itself; the seed-module facades (``fleet_async.agent``, ...) stand
+above everything, so nothing in the package imports them. ``fleet_async.tasks`` reaches the
+core only through the mission seam, ``fleet_async.core.missions``.
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("missions",),
     ("agents",),
     ("sim",),
+    ("metrics", "checkpoint"),
     ("managers",),
     ("devices",),
     ("scenario", "view"),
@@ -196,7 +197,7 @@ def test_the_contract_lets_type_only_imports_point_anywhere():
 def test_floor_mates_do_not_import_each_other():
     source = "import fleet_async.core.view.gui\n"
     assert upward_imports(source, "fleet_async.core.scenario.build") == [
-        "fleet_async.core.scenario.build:1 imports fleet_async.core.view.gui (floor 12 >= 12)"
+        "fleet_async.core.scenario.build:1 imports fleet_async.core.view.gui (floor 13 >= 13)"
     ]
 
 

@@ -1,9 +1,9 @@
-"""The ``fleet-async`` command: run scenarios, try the examples, benchmark the simulator.
+"""The ``fleet-async`` command: run scenarios, sweep them, try the examples, benchmark.
 
 ``main`` parses the command line and hands it to the subcommand's module (``run``,
-``examples``; ``bench`` is :mod:`fleet_async.bench`). A subcommand reports a problem the user
-can fix by raising :class:`CliError`, which ``main`` prints as ``fleet-async: error: <message>``
-(no traceback) with the error's exit code.
+``sweep``, ``examples``; ``bench`` is :mod:`fleet_async.bench`). A subcommand reports a problem
+the user can fix by raising :class:`CliError`, which ``main`` prints as
+``fleet-async: error: <message>`` (no traceback) with the error's exit code.
 
 PyBullet's C code prints a build banner when it is imported and, in GUI mode, dozens of lines
 when it connects and disconnects. Unless ``--verbose`` is given, ``main`` imports everything
@@ -30,7 +30,9 @@ fleet_async: a kinematics-first multi-robot fleet simulator on PyBullet.
 
 subcommands:
   run       build a scenario from its YAML file and run it headless, then print a summary
-            (robots, sim time, steps, real-time factor, actions, collisions)
+            (robots, sim time, steps, real-time factor, actions, collisions, fleet KPIs)
+  sweep     run a scenario over a parameter grid and seeds, on a process pool or Ray, into
+            one table of fleet KPIs (CSV or Parquet), optionally plotted
   examples  list the bundled examples (the default), run one, or copy them into a folder
   bench     run the fleet-scale benchmark: step time, real-time factor, spawn time and
             memory per agent for fleets of N robots
@@ -38,8 +40,8 @@ subcommands:
 'fleet-async COMMAND --help' explains every option of a command.
 Every command keeps PyBullet's own C-level output (its build banner, GUI chatter) off the
 terminal; --verbose shows it.
-Exit codes: 0 success, 2 bad input (options, scenario, missing file), 130 interrupted; a
-Python example run by 'examples --run' exits with its own code.
+Exit codes: 0 success, 1 a sweep with failed runs, 2 bad input (options, scenario, missing
+file), 130 interrupted; a Python example run by 'examples --run' exits with its own code.
 """
 
 _RUN_EPILOG = """\
@@ -47,6 +49,7 @@ examples:
   fleet-async run examples/scenarios/pick_drop.yaml            # until its actions are done
   fleet-async run examples/scenarios/warehouse.yaml            # the shift its missions run
   fleet-async run my_scenario.yaml --duration 60 --record out.gif --record-size 400x300
+  fleet-async run my_scenario.yaml --duration 30 --save-state warm.ckpt   # branch a sweep
 
 How long a run lasts: --duration S if given, else the scenario's simulation.duration if it
 sets one (> 0), else until the scenario's work is done: every mission it names has returned
@@ -54,10 +57,17 @@ and every robot has finished its actions: list and stopped; at most 600 s of sim
 summary says why the run stopped).
 
 The summary explains each count: 'objects' is every sim object, robots included (as the
-monitor counts them); 'actions completed' / 'actions failed' count ACTION_COMPLETED /
-ACTION_FAILED events (cancelled actions count as failed); 'collisions' counts contacts that
-began (a pair of objects that starts touching; touching again later counts again). A progress
-bar is drawn on stderr when it is a terminal.
+monitor counts them); 'robots' leaves out devices (doors, lifts, workcells), which are agents;
+'actions completed' / 'actions failed' count the robots' ACTION_COMPLETED / ACTION_FAILED
+events (cancelled actions count as failed); 'collisions' counts contacts that
+began (a pair of objects that starts touching; touching again later counts again). The
+counts from 'actions completed' to 'battery used' are the run's fleet KPIs (sim.kpis()), the
+row 'fleet-async sweep' records for each run: tasks are TASK_COMPLETED / TASK_FAILED events
+your code emits; times and distance are summed over the robots (and given per robot); a
+robot's time is moving, waiting (standing with an action in progress) or idle. They count up
+to the run's last step, so the actions that the end of a timed run cancels are not among them.
+docs/sweeps.md defines each; --per-robot adds a table per robot. A progress bar is drawn on
+stderr when it is a terminal.
 """
 
 _VERBOSE_HELP = "show PyBullet's own C-level output (build banner, GUI chatter), hidden by default"
@@ -85,6 +95,22 @@ def _add_run(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     run.add_arguments(parser)
     parser.set_defaults(handler=run.execute)
+
+
+def _add_sweep(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from fleet_async.cli import sweep
+
+    parser = subparsers.add_parser(
+        "sweep",
+        help="run a scenario over a parameter grid and seeds into a table of fleet KPIs",
+        description="Run SCENARIO once per (grid point, seed): the grid is every combination "
+        "of the\n--set values. Each run is one row of fleet KPIs in the --out table.",
+        epilog=sweep.EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        parents=[_common_options(argparse.SUPPRESS)],
+    )
+    sweep.add_arguments(parser)
+    parser.set_defaults(handler=sweep.execute)
 
 
 def _add_examples(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -148,6 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
     subparsers.required = True
     _add_run(subparsers)
+    _add_sweep(subparsers)
     _add_examples(subparsers)
     _add_bench(subparsers)
     return parser

@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-__all__ = ["ProgressBar", "format_progress"]
+__all__ = ["ProgressBar", "RunsProgressBar", "format_progress", "format_runs_progress"]
 
 
 def format_progress(
@@ -119,16 +119,68 @@ class ProgressBar:
             self._stream.write("\n")
             self._stream.flush()
 
-    def _draw(self, sim_elapsed: float, now: float) -> None:
+    def _line(self, sim_elapsed: float, now: float) -> str:
+        """The text of the bar at ``sim_elapsed``, ``now`` on the wall clock."""
         wall = now - self._wall0
         rtf = sim_elapsed / wall if wall > 0 else math.inf
-        line = format_progress(sim_elapsed, self.total, rtf, open_ended=self.open_ended)
+        return format_progress(sim_elapsed, self.total, rtf, open_ended=self.open_ended)
+
+    def _draw(self, done: float, now: float) -> None:
+        line = self._line(done, now)
         # Pad over what is left of a longer previous line.
         padding = " " * max(0, self._drawn_width - len(line))
         self._stream.write(f"\r{line}{padding}")
         self._stream.flush()
         self._drawn_width = len(line)
         self._ever_drawn = True
+
+
+def format_runs_progress(
+    done: int, total: int, failed: int, eta: float | None, width: int = 24
+) -> str:
+    """The progress line of a sweep, e.g. ``[######......]  37/100 runs  2 failed  ETA 41 s``.
+
+    Args:
+        done: Runs with a row so far.
+        total: Runs in the sweep (> 0).
+        failed: Rows with an error among ``done``.
+        eta: Wall seconds left (None: not known yet).
+        width: Characters inside the brackets.
+    """
+    fraction = min(max(done / total, 0.0), 1.0) if total > 0 else 1.0
+    filled = int(fraction * width)
+    left = "ETA -" if eta is None else f"ETA {eta:.0f} s"
+    return f"[{'#' * filled}{'.' * (width - filled)}]  {done}/{total} runs  {failed} failed  {left}"
+
+
+class RunsProgressBar(ProgressBar):
+    """Draws :func:`format_runs_progress` on ``stream`` when it is a terminal.
+
+    Args:
+        total: Runs in the sweep.
+        stream: Where to draw (normally ``sys.stderr``).
+        skipped: Runs already done when the sweep started (they do not count towards the ETA).
+        min_interval: Fewest wall seconds between two redraws.
+        clock: Wall clock in seconds (injectable for tests).
+    """
+
+    def __init__(
+        self,
+        total: int,
+        stream: TextIO,
+        skipped: int = 0,
+        min_interval: float = 0.1,
+        clock: Callable[[], float] = time.perf_counter,
+    ) -> None:
+        super().__init__(float(total), stream, min_interval, clock)
+        self.skipped = skipped
+        self.failed = 0
+
+    def _line(self, done: float, now: float) -> str:
+        ran = done - self.skipped
+        wall = now - self._wall0
+        eta = (self.total - done) * wall / ran if ran > 0 and wall > 0 else None
+        return format_runs_progress(int(done), int(self.total), self.failed, eta)
 
 
 class _BarAwareStream:

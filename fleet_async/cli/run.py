@@ -5,7 +5,9 @@ settings decided by the command line instead of the file: ``gui`` (off unless ``
 when the scenario does not set ``target_rtf``, no real-time pacing (the library default of 1.0
 is meant for interactive use; a command-line run goes as fast as it can). The run itself is
 :func:`fleet_async.scenario_runner.run_scenario`: the scenario's missions and queued actions,
-for ``--duration`` / ``simulation.duration`` or until its work is done (at most 600 s).
+for ``--duration`` / ``simulation.duration`` or until its work is done (at most 600 s). The
+summary includes the run's fleet KPIs (``sim.kpis()``, the row a sweep records per run), up to
+the run's last step.
 """
 
 from __future__ import annotations
@@ -18,10 +20,12 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
+from fleet_async.cli.tables import format_table
+from fleet_async.core import CheckpointError, FleetKpis, RobotKpis
 from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
@@ -30,8 +34,10 @@ from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
 from fleet_async.scenario_runner import DEFAULT_MAX_DURATION, ScenarioOutcome, run_scenario
 
+if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
+
 __all__ = [
-    "ActionTally",
     "RunSummary",
     "StepWatcher",
     "add_arguments",
@@ -136,6 +142,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "run is the same on both",
     )
     parser.add_argument(
+        "--save-state",
+        metavar="FILE",
+        help="after the run, save a checkpoint of it to FILE (sim.save_state), to branch a "
+        "sweep from: fleet-async sweep SCENARIO --checkpoint FILE",
+    )
+    parser.add_argument(
+        "--per-robot",
+        action="store_true",
+        help="after the summary, print a table of each robot's figures (distance, moving / "
+        "waiting / idle time, actions, tasks, collisions, battery)",
+    )
+    parser.add_argument(
         "--quiet",
         action="store_true",
         help="print nothing (no progress bar, no summary); errors still go to stderr",
@@ -202,22 +220,6 @@ def run_steps(sim: MultiRobotSimulationCore, steps: int, on_frame: Callable[[], 
     return runner.run_steps(sim, steps, frame)
 
 
-class ActionTally:
-    """Counts ``ACTION_COMPLETED`` and ``ACTION_FAILED`` events of a simulation."""
-
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
-        self.completed = 0
-        self.failed = 0
-        sim.events.on(SimEvents.ACTION_COMPLETED, self._on_completed)
-        sim.events.on(SimEvents.ACTION_FAILED, self._on_failed)
-
-    def _on_completed(self, **_: Any) -> None:
-        self.completed += 1
-
-    def _on_failed(self, **_: Any) -> None:
-        self.failed += 1
-
-
 # ----- the summary ----------------------------------------------------------------------------
 
 
@@ -226,19 +228,22 @@ class RunSummary:
     """What one run did.
 
     Attributes:
-        robots: Agents in the simulation at the end.
+        robots: Agents in the simulation at the end, devices not included.
         objects: Sim objects at the end, robots included (as the monitor counts them).
         sim_time: Sim seconds at the end.
         steps: Steps this run took.
         wall_time: Wall seconds spent running (loading not included).
-        actions_completed: ``ACTION_COMPLETED`` events during the run.
-        actions_failed: ``ACTION_FAILED`` events (failed or cancelled actions).
+        actions_completed: The robots' ``ACTION_COMPLETED`` events during the run.
+        actions_failed: The robots' ``ACTION_FAILED`` events (failed or cancelled actions).
         collisions: ``sim.collision_count`` at the end: contacts that began, that is how many
             times a pair of objects started touching.
         missions: The scenario's missions (its ``missions:`` entries).
         stopped: Why the run stopped, for people (empty when interrupted).
         recording: The saved recording, if any.
         interrupted: Whether Ctrl+C stopped the run early.
+        kpis: The run's fleet KPIs (``sim.kpis().summary()``), shown after the collisions.
+        devices: Agents in the simulation at the end that are devices (doors, lifts,
+            workcells): not robots, so not in the fleet KPIs.
     """
 
     robots: int
@@ -253,6 +258,8 @@ class RunSummary:
     stopped: str = ""
     recording: str | None = None
     interrupted: bool = False
+    kpis: FleetKpis | None = None
+    devices: int = 0
 
     @property
     def real_time_factor(self) -> float:
@@ -263,8 +270,21 @@ class RunSummary:
 def format_summary(summary: RunSummary) -> str:
     """The summary as aligned ``name: value (what it counts)`` lines."""
     rtf = summary.real_time_factor
+    kpis = summary.kpis
+    robots = f"{summary.robots} (agents"
+    if kpis is not None and kpis.robot_count != summary.robots:
+        robots += (
+            f" at the end; the figures below count {kpis.robot_count}, those removed during "
+            "the run too"
+        )
+    if summary.devices:
+        robots += f"; {summary.devices} more are devices, not robots"
+    robots += ")"
+    failed = "failed or cancelled"
+    if kpis is not None and kpis.actions_cancelled:
+        failed += f"; {kpis.actions_cancelled} of them cancelled"
     rows = [
-        ("robots", f"{summary.robots} (agents)"),
+        ("robots", robots),
         ("objects", f"{summary.objects} (every sim object, robots included)"),
         ("sim time", f"{summary.sim_time:.3f} s"),
         ("steps", str(summary.steps)),
@@ -272,11 +292,12 @@ def format_summary(summary: RunSummary) -> str:
         ("real-time factor", f"{rtf:.1f}x" if math.isfinite(rtf) else "inf"),
         ("missions", f"{summary.missions} (the scenario's missions: entries)"),
         ("actions completed", str(summary.actions_completed)),
-        ("actions failed", f"{summary.actions_failed} (failed or cancelled)"),
+        ("actions failed", f"{summary.actions_failed} ({failed})"),
         (
             "collisions",
             f"{summary.collisions} (contacts that began: each time two objects started to touch)",
         ),
+        *(_kpi_rows(kpis) if kpis is not None else []),
     ]
     if summary.stopped:
         rows.append(("stopped", summary.stopped))
@@ -285,6 +306,46 @@ def format_summary(summary: RunSummary) -> str:
     if summary.interrupted:
         rows.append(("interrupted", "yes (Ctrl+C)"))
     return "\n".join(f"{name + ':':<19}{value}" for name, value in rows)
+
+
+def _kpi_rows(kpis: FleetKpis) -> list[tuple[str, str]]:
+    """The fleet KPIs the rows above do not show yet (docs/sweeps.md defines them)."""
+    over = f"summed over {kpis.robot_count} robot{'' if kpis.robot_count == 1 else 's'}"
+
+    def total(value: float, unit: str, mean: float, what: str = "") -> str:
+        return f"{value:.1f} {unit} ({what}{over}; {mean:.1f} {unit} per robot)"
+
+    if kpis.battery_used_total is None or kpis.battery_used_mean is None:
+        battery = "- (no robot has a battery)"
+    else:
+        battery = (
+            f"{kpis.battery_used_total:.3f} full batteries (summed over {kpis.battery_robots} "
+            f"robot{'' if kpis.battery_robots == 1 else 's'} with one; "
+            f"{kpis.battery_used_mean:.3f} per robot; lowest charge left "
+            f"{kpis.battery_min_soc:.2f})"
+        )
+    return [
+        ("tasks completed", f"{kpis.tasks_completed} (TASK_COMPLETED events: work reported done)"),
+        ("tasks failed", f"{kpis.tasks_failed} (TASK_FAILED events)"),
+        ("throughput", f"{kpis.throughput_per_hour:.1f} tasks completed per hour of sim time"),
+        ("distance", total(kpis.distance_total_m, "m", kpis.distance_mean_m, "driven, ")),
+        ("moving time", total(kpis.moving_time_total_s, "s", kpis.moving_time_mean_s)),
+        (
+            "waiting time",
+            total(
+                kpis.waiting_time_total_s,
+                "s",
+                kpis.waiting_time_mean_s,
+                "standing with an action in progress, ",
+            ),
+        ),
+        (
+            "idle time",
+            total(kpis.idle_time_total_s, "s", kpis.idle_time_mean_s, "standing with no action, "),
+        ),
+        ("mission errors", f"{kpis.mission_errors} (exceptions that ended a mission)"),
+        ("battery used", battery),
+    ]
 
 
 # ----- the command ----------------------------------------------------------------------------
@@ -352,7 +413,7 @@ def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | No
 
 
 def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
-    tally = ActionTally(sim)
+    kpis = sim.kpis()
     if args.record:
         _start_recording(sim, args)
     if args.gui:
@@ -365,6 +426,11 @@ def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     )
     StepWatcher(sim, bar)
     start_step, start_time = sim.step_count, sim.sim_time
+    # At its limit the run cancels the missions still alive: the KPIs stop at its last step, as
+    # a sweep's do, so the actions that ending cancels are not counted.
+    kpis.stop_after_step(
+        steps_for(start_time + (limit or DEFAULT_MAX_DURATION), sim.params.timestep)
+    )
     outcome: ScenarioOutcome | None = None
     wall0 = time.perf_counter()
     streams = sys.stdout, sys.stderr
@@ -380,20 +446,44 @@ def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     if bar is not None:
         bar.finish(sim.sim_time - start_time)
     saved = sim.stop_recording() if args.record else None
+    if args.save_state:
+        try:
+            sim.save_state(args.save_state)
+        except CheckpointError as exc:
+            raise CliError(str(exc)) from exc
     if not args.quiet:
-        summary = RunSummary(
-            robots=sim.world.agent_count,  # the monitor's figures, so the two agree
-            objects=sim.world.object_count,
-            sim_time=sim.sim_time,
-            steps=sim.step_count - start_step,
-            wall_time=wall,
-            actions_completed=tally.completed,
-            actions_failed=tally.failed,
-            collisions=sim.collision_count,
-            missions=len(sim.scenario_missions),
-            stopped=outcome.describe() if outcome is not None else "",
-            recording=saved,
-            interrupted=outcome is None,
+        row = kpis.summary()
+        print(
+            format_summary(_summarize(sim, row, sim.step_count - start_step, wall, outcome, saved))
         )
-        print(format_summary(summary))
+        if args.per_robot:
+            robots = [r.as_dict() for r in kpis.per_robot()]
+            print(f"\nper robot:\n{format_table(robots, RobotKpis.columns())}")
     return INTERRUPTED_EXIT_CODE if outcome is None else 0
+
+
+def _summarize(
+    sim: MultiRobotSimulationCore,
+    row: FleetKpis,
+    steps: int,
+    wall: float,
+    outcome: ScenarioOutcome | None,
+    recording: str | None,
+) -> RunSummary:
+    devices = sum(1 for agent in sim.agents if not cast("Agent", agent).is_robot)
+    return RunSummary(
+        robots=sim.world.agent_count - devices,  # the monitor's agents are these and devices
+        objects=sim.world.object_count,
+        sim_time=sim.sim_time,
+        steps=steps,
+        wall_time=wall,
+        actions_completed=row.actions_completed,
+        actions_failed=row.actions_failed,
+        collisions=sim.collision_count,
+        missions=len(sim.scenario_missions),
+        stopped=outcome.describe() if outcome is not None else "",
+        recording=recording,
+        interrupted=outcome is None,
+        kpis=row,
+        devices=devices,
+    )

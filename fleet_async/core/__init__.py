@@ -2,10 +2,11 @@
 
 Its sub-packages are layers that import only downward at run time, from ``base`` up through
 ``geometry``, ``world``, ``collision``, ``bodies``, ``motion``, ``actions``, ``missions``,
-``agents``, ``sim``, ``managers`` and ``devices`` to ``scenario`` and ``view``;
-``simulation.py`` assembles ``MultiRobotSimulationCore`` on top (docs/architecture.md).
-Nothing in ``fleet_async.core`` imports ``fleet_async.tasks``; the async mission layer sits on
-top of this package, reaches it through ``fleet_async.core.missions``, and never inside it.
+``agents``, ``sim``, ``metrics`` and ``checkpoint``, ``managers`` and ``devices`` to ``scenario``
+and ``view``; ``simulation.py`` assembles ``MultiRobotSimulationCore`` on top
+(docs/architecture.md). Nothing in ``fleet_async.core`` imports ``fleet_async.tasks``; the async
+mission layer sits on top of this package, reaches it through ``fleet_async.core.missions``, and
+never inside it.
 """
 
 from fleet_async.core.actions.action import (
@@ -62,6 +63,7 @@ from fleet_async.core.bodies.models import (
 )
 from fleet_async.core.bodies.sim_object import ObjectRemovedError, SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.checkpoint.format import CheckpointError
 from fleet_async.core.devices import (
     DispenseAction,
     Door,
@@ -83,6 +85,8 @@ from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.managers.sim_object_manager import SimObjectManager, register_entity_class
+from fleet_async.core.metrics.kpis import KpiCollector
+from fleet_async.core.metrics.rows import FleetKpis, RobotKpis
 from fleet_async.core.motion.controllers import (
     Controller,
     ControllerParams,
@@ -115,6 +119,7 @@ __all__ = [
     "AgentPlugin",
     "AgentSpawnParams",
     "BatteryPlugin",
+    "CheckpointError",
     "CollisionDetectionMethod",
     "CollisionMode",
     "Controller",
@@ -136,11 +141,13 @@ __all__ = [
     "ElevatorRequestResult",
     "ElevatorState",
     "EventBus",
+    "FleetKpis",
     "GridSpawnParams",
     "IKParams",
     "IngestAction",
     "JointAction",
     "KinematicController",
+    "KpiCollector",
     "LazyLogger",
     "MotionMode",
     "MoveAction",
@@ -157,6 +164,7 @@ __all__ = [
     "PoseAction",
     "PosePhase",
     "RandomWalkController",
+    "RobotKpis",
     "ShapeParams",
     "SimEvents",
     "SimObject",

@@ -2,13 +2,15 @@
 
 The kernel (``sim/kernel.py``) owns the clock, the step loop and the objects; the mission seam
 (``missions/``) and collision methods (``collision/api.py``) are part of it. This class adds
-what stands above the kernel: scenarios and worlds (``scenario/``), recording, the monitor and
-the GUI (``view/``), and ``run_simulation``, which wraps the step loop in real-time pacing,
-the monitor and GUI input.
+what stands above the kernel: fleet KPIs (``metrics/``), checkpoints (``checkpoint/``),
+scenarios and worlds (``scenario/``), recording, the monitor and the GUI (``view/``), and
+``run_simulation``, which wraps the step loop in real-time pacing, the monitor and GUI input.
 """
 
 from __future__ import annotations
 
+from fleet_async.core.checkpoint.api import CheckpointApi
+from fleet_async.core.metrics.kpis import KpiApi
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
@@ -21,7 +23,14 @@ __all__ = ["MultiRobotSimulationCore"]
 
 
 class MultiRobotSimulationCore(
-    ScenarioApi, WorldLoadingApi, RecordingApi, MonitorApi, GuiApi, SimulationKernel
+    ScenarioApi,
+    WorldLoadingApi,
+    RecordingApi,
+    MonitorApi,
+    GuiApi,
+    KpiApi,
+    CheckpointApi,
+    SimulationKernel,
 ):
     """A multi-robot simulation on one PyBullet client.
 

@@ -124,6 +124,12 @@ class Action(ABC):
         """Set by the action queue: called when :meth:`cancel` runs."""
         self._cancel_hook = hook
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the queue's cancel hook, which the queue binds again (checkpoints)."""
+        state = dict(self.__dict__)
+        state["_cancel_hook"] = None
+        return state
+
     def get_duration(self) -> float | None:
         """Seconds from start to end (or None if it has not both started and ended)."""
         if self.start_time is None or self.end_time is None:

@@ -12,7 +12,8 @@ from __future__ import annotations
 import functools
 import heapq
 from collections import deque
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.actions.action import Action
 from fleet_async.core.base.events import SimEvents
@@ -119,6 +120,38 @@ class ActionQueue:
         self._due.clear()
         self._on_motion.clear()
         self._timers.clear()
+
+    # ----- checkpoints ----------------------------------------------------------------------
+
+    def get_state(self) -> dict[str, Any]:
+        """Every queue, current action, timer and wake flag (for ``sim.save_state``)."""
+        return {
+            "queued": {key: list(q) for key, q in self._queued.items() if q},
+            "current": dict(self._current),
+            "due": sorted(self._due),
+            "on_motion": sorted(self._on_motion),
+            "timers": list(self._timers),
+            "seq": self._seq,
+            "now": self.now,
+        }
+
+    def set_state(self, state: dict[str, Any], agent_of: Callable[[int], Agent]) -> None:
+        """Replace every queue with ``state`` (from :meth:`get_state`); ``agent_of`` maps an
+        object id to its agent. Queued and running actions get their cancel hooks again."""
+        self._queued = {key: deque(actions) for key, actions in state["queued"].items()}
+        self._current = dict(state["current"])
+        self._agents = {key: agent_of(key) for key in {*self._queued, *self._current}}
+        for key in (*state["due"], *state["on_motion"]):
+            self._agents.setdefault(key, agent_of(key))
+        for key, agent in self._agents.items():
+            for action in (*self._queued.get(key, ()), *filter(None, [self._current.get(key)])):
+                action.bind_cancel_hook(functools.partial(self._cancelled, agent))
+        self._due = set(state["due"])
+        self._on_motion = set(state["on_motion"])
+        self._timers = list(state["timers"])
+        heapq.heapify(self._timers)
+        self._seq = state["seq"]
+        self.now = state["now"]
 
     # ----- driving ------------------------------------------------------------------------
 

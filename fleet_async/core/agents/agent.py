@@ -87,6 +87,9 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
 
     _spawn_params_cls: ClassVar[type[AgentSpawnParams]] = AgentSpawnParams
     is_agent: ClassVar[bool] = True
+    is_robot: ClassVar[bool] = True
+    """Whether fleet figures (``sim.kpis()``) count agents of this class as robots; devices
+    (doors, lifts, workcells) are agents that are not."""
     spawned_event: ClassVar[str | None] = SimEvents.AGENT_SPAWNED
     removed_event: ClassVar[str | None] = SimEvents.AGENT_REMOVED
 

@@ -33,6 +33,16 @@ class AgentPlugin:
     def on_remove(self) -> None:
         """Called when the plugin is removed or its agent leaves the simulation."""
 
+    def get_state(self) -> dict[str, Any]:
+        """What ``sim.save_state`` keeps of this plugin: its attributes (objects of the
+        simulation are saved by id). Override both methods if some attribute cannot be pickled
+        or must not be restored."""
+        return dict(vars(self))
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
+        vars(self).update(state)
+
 
 class BatteryPlugin(AgentPlugin):
     """State of charge that drains with distance and time and refills while charging.
@@ -83,15 +93,18 @@ class BatteryPlugin(AgentPlugin):
         self.charge_rate = float(values["charge_rate"])
         self.charging = False
         self.distance = 0.0
+        self.used = 0.0
+        """SoC drawn by driving and by time so far (charging not subtracted; a flat battery
+        draws nothing)."""
 
     def on_step(self, dt: float) -> None:
         """Drain by the distance moved this step and by time; charge when charging."""
         moved = float(np.linalg.norm(self.agent.velocity)) * dt
         self.distance += moved
-        delta = -self.drain_per_meter * moved - self.drain_per_second * dt
-        if self.charging:
-            delta += self.charge_rate * dt
-        self.soc = min(1.0, max(0.0, self.soc + delta))
+        drain = self.drain_per_meter * moved + self.drain_per_second * dt
+        gain = self.charge_rate * dt if self.charging else 0.0
+        self.used += min(drain, self.soc + gain)
+        self.soc = min(1.0, max(0.0, self.soc + (gain - drain)))
 
 
 AGENT_PLUGIN_REGISTRY: dict[str, type[AgentPlugin]] = {"battery": BatteryPlugin}

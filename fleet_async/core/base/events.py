@@ -67,6 +67,11 @@ class SimEvents:
     """An action finished successfully; payload ``agent``, ``action``, ``status``."""
     ACTION_FAILED = "action_failed"
     """An action failed or was cancelled; payload ``agent``, ``action``, ``status``."""
+    TASK_COMPLETED = "task_completed"
+    """Fleet code finished one unit of work (an order, a delivery): emitted by *your* missions
+    or callbacks, counted by ``sim.kpis()``; payload ``sim``, ``agent`` (or None), ``task``."""
+    TASK_FAILED = "task_failed"
+    """Fleet code gave up on a unit of work; same payload as TASK_COMPLETED."""
     MISSION_FAILED = "mission_failed"
     """A mission ended with an exception (not a cancellation), emitted by the mission runtime
     when it ends; payload ``sim``, ``mission`` (its name), ``error``."""

@@ -82,6 +82,24 @@ class PeriodicSchedule:
         """Remove every entry."""
         self._entries.clear()
 
+    def get_state(self) -> list[tuple[int, float]]:
+        """Each entry's progress (periods served, last call time), in order (checkpoints)."""
+        return [(e.count, e.last_time) for e in self._entries]
+
+    def set_state(self, state: list[tuple[int, float]]) -> None:
+        """Restore :meth:`get_state`'s progress onto the same entries.
+
+        Raises:
+            ValueError: if the number of entries differs.
+        """
+        if len(state) != len(self._entries):
+            raise ValueError(
+                f"the checkpoint has {len(state)} scheduled callbacks here, this simulation "
+                f"{len(self._entries)}"
+            )
+        for entry, (count, last_time) in zip(self._entries, state, strict=True):
+            entry.count, entry.last_time = count, last_time
+
     def reset(self) -> None:
         """Restart every entry's schedule from sim time 0."""
         for entry in self._entries:

@@ -112,6 +112,20 @@ class CollisionSystem:
         self._next_due_step = step + period_steps
         return True
 
+    def get_state(self) -> dict[str, Any]:
+        """Active pairs, the check schedule and the hash cell size (checkpoints)."""
+        return {
+            "active": sorted(self._active),
+            "next_due_step": self._next_due_step,
+            "cell_size": self.cell_size,
+        }
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state`; registrations are redone at the next check."""
+        self._active = {(int(a), int(b)) for a, b in state["active"]}
+        self._next_due_step = state["next_due_step"]
+        self.cell_size = state["cell_size"]
+
     def reset(self) -> None:
         """Forget every registration and active pair (simulation reset)."""
         self._owner[:] = -1

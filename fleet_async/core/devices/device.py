@@ -36,6 +36,7 @@ class Device(Agent):
     _spawn_params_cls: ClassVar[type[AgentSpawnParams]] = AgentSpawnParams
     device_type: ClassVar[str] = "device"
     """The scenario ``type:`` name of this device class."""
+    is_robot: ClassVar[bool] = False  # the fleet's KPIs leave devices out
 
     @classmethod
     def from_params(  # type: ignore[override]  # takes the device's own params

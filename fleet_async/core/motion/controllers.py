@@ -27,7 +27,7 @@ from fleet_async.core.base.types import MotionMode, MovementDirection, coerce_en
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.motion.kinematics import KIND_DIFFERENTIAL, KIND_OMNI, KinematicEngine
-from fleet_async.core.motion.segments import MotionLimits
+from fleet_async.core.motion.segments import MotionLimits, checked_limit
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -47,25 +47,6 @@ __all__ = [
 ]
 
 logger = logging.getLogger(__name__)
-
-
-def _limit(value: Any, name: str) -> float | tuple[float, float, float]:
-    """Validate a scalar or per-axis (3) positive limit."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        if not (math.isfinite(value) or value == math.inf) or value <= 0:
-            raise ValueError(f"ControllerParams.{name}: expected a number > 0, got {value!r}")
-        return float(value)
-    try:
-        items = [float(v) for v in value]
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"ControllerParams.{name}: expected a number or [x, y, z], got {value!r}"
-        ) from None
-    if len(items) != 3 or not all(v > 0 for v in items):
-        raise ValueError(
-            f"ControllerParams.{name}: expected 3 numbers > 0 (x, y, z), got {value!r}"
-        )
-    return (items[0], items[1], items[2])
 
 
 @dataclass
@@ -91,7 +72,7 @@ class ControllerParams:
 
     def __post_init__(self) -> None:
         for name in ("max_linear_vel", "max_linear_accel", "max_angular_vel", "max_angular_accel"):
-            setattr(self, name, _limit(getattr(self, name), name))
+            setattr(self, name, checked_limit(getattr(self, name), f"ControllerParams.{name}"))
         self.default_direction = coerce_enum(
             MovementDirection, self.default_direction, "ControllerParams.default_direction"
         )
@@ -126,6 +107,16 @@ class Controller:
 
     def compute(self, agent: Agent, dt: float) -> None:
         """Advance this controller for one step of ``dt`` seconds."""
+
+    def get_state(self) -> dict[str, Any]:
+        """What ``sim.save_state`` keeps of this controller: its attributes (objects of the
+        simulation are saved by id). Override both methods if some attribute cannot be pickled
+        or must not be restored."""
+        return dict(vars(self))
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
+        vars(self).update(state)
 
     @property
     def is_base(self) -> bool:

@@ -168,6 +168,36 @@ class JointSet:
             )
         return int(joint)
 
+    # ----- checkpoints ----------------------------------------------------------------------
+
+    def get_state(self) -> dict[str, Any]:
+        """Positions, velocities, targets, forces and whether joints move (checkpoints)."""
+        self.refresh()
+        return {
+            "positions": self.positions.copy(),
+            "velocities": self.velocities.copy(),
+            "targets": self.targets.copy(),
+            "forces": self.forces.copy(),
+            "moving": self.moving,
+        }
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state` (kinematic joints; PyBullet's joints are reset to it).
+
+        Raises:
+            ValueError: for another number of joints.
+        """
+        if len(state["positions"]) != len(self.infos):
+            raise ValueError(
+                f"{self.owner}: the checkpoint has {len(state['positions'])} joints, this "
+                f"body {len(self.infos)}"
+            )
+        self.set_positions(dict(enumerate(state["positions"].tolist())))
+        self.velocities[:] = state["velocities"]
+        self.targets[:] = state["targets"]
+        self.forces[:] = state["forces"]
+        self.moving = bool(state["moving"])
+
     # ----- reading -------------------------------------------------------------------------
 
     def refresh(self) -> None:
@@ -348,6 +378,10 @@ class JointMotion:
     def activate(self, agent: Agent, joints: JointSet) -> None:
         """Start advancing ``agent``'s joints each step (until they arrive)."""
         self._active[agent.object_id] = (agent, joints)
+
+    def active_ids(self) -> list[int]:
+        """Object ids of the agents whose joints are moving, ascending."""
+        return sorted(self._active)
 
     def forget(self, agent: Agent) -> None:
         """Stop advancing ``agent`` (it left the simulation)."""

@@ -21,8 +21,9 @@ FORWARD segments (theta = 0, drive straight). An omnidirectional robot drives ev
 current orientation; with ``final_orientation_align`` both end with a turn in place to the last
 waypoint's orientation. Every segment starts and ends at rest and ends exactly on its target.
 
-``advance(dt)`` integrates all moving slots with numpy in one pass. Python runs only when a
-segment ends (to plan the next one), never per robot per step.
+``advance(dt)`` integrates all moving slots with numpy in one pass (velocity commands through
+``velocity.py``). Python runs only when a segment ends (to plan the next one), never per robot
+per step. ``get_state`` / ``set_state`` hand every slot's columns and path to a checkpoint.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -47,6 +49,7 @@ from fleet_async.core.motion.segments import (
     trapezoid_duration,
     trapezoid_progress,
 )
+from fleet_async.core.motion.velocity import advance_velocity, body_velocity
 from fleet_async.core.world.state import KinematicState
 
 __all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine"]
@@ -55,6 +58,24 @@ KIND_OMNI = 0
 KIND_DIFFERENTIAL = 1
 _IDLE, _VELOCITY, _POSE = 0, 1, 2
 _NONE, _TURNED, _DRIVING = 0, 1, 2  # progress toward the plan's next waypoint
+
+# u: progress along the segment in [0, 1]; steps: steps of the segment taken so far; u_peak:
+# cruise rate of u (1/s); u_t_acc: s spent accelerating (and braking); u_t_end: s the segment
+# takes; theta, sl_*: the rotation and its slerp terms.
+_SCALARS = ("u", "steps", "u_peak", "u_t_acc", "u_t_end", "theta", "sl_dot", "sl_theta", "sl_sin")
+_COLUMNS: dict[str, tuple[tuple[int, ...], type, float]] = {
+    "row": ((), np.int64, -1),
+    "kind": ((), np.int8, 0),
+    "mode": ((), np.int8, _IDLE),
+    **dict.fromkeys(("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"), ((3,), np.float64, 0.0)),
+    **dict.fromkeys(("q0", "q1", "q_goal"), ((4,), np.float64, 0.0)),
+    **dict.fromkeys(_SCALARS, ((), np.float64, 0.0)),
+    "lin_scalar": ((), np.bool_, True),
+    "ang_scalar": ((), np.bool_, True),
+    "cmd": ((4,), np.float64, 0.0),  # body-frame vx, vy, vz, wz
+    "vel": ((4,), np.float64, 0.0),  # current body-frame velocity in VELOCITY mode
+}
+"""Per-slot columns of the engine: name -> (shape of one slot's entry, dtype, fill value)."""
 
 
 @dataclass
@@ -77,7 +98,7 @@ class KinematicEngine:
             finished its path, False when stopped or replaced.
     """
 
-    # Per-slot columns, grown together by _alloc (see there for shapes).
+    # Per-slot columns, grown together by _alloc (shapes and dtypes in _COLUMNS).
     row: np.ndarray
     kind: np.ndarray
     mode: np.ndarray
@@ -117,36 +138,12 @@ class KinematicEngine:
     # ----- slots --------------------------------------------------------------------------
 
     def _alloc(self, cap: int) -> None:
-        def grow(name: str, shape: tuple[int, ...], dtype: type, fill: float) -> None:
+        for name, (shape, dtype, fill) in _COLUMNS.items():
             new: np.ndarray = np.full((cap, *shape), fill, dtype=dtype)
             old = getattr(self, name, None)
             if old is not None:
                 new[: len(old)] = old
             setattr(self, name, new)
-
-        grow("row", (), np.int64, -1)
-        grow("kind", (), np.int8, 0)
-        grow("mode", (), np.int8, _IDLE)
-        for name in ("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"):
-            grow(name, (3,), np.float64, 0.0)
-        for name in ("q0", "q1", "q_goal"):
-            grow(name, (4,), np.float64, 0.0)
-        for name in (
-            "u",
-            "steps",  # steps of the current segment taken so far
-            "u_peak",  # cruise rate of u (1/s)
-            "u_t_acc",  # s spent accelerating (and braking)
-            "u_t_end",  # s the whole segment takes
-            "theta",
-            "sl_dot",
-            "sl_theta",
-            "sl_sin",
-        ):
-            grow(name, (), np.float64, 0.0)
-        grow("lin_scalar", (), np.bool_, True)
-        grow("ang_scalar", (), np.bool_, True)
-        grow("cmd", (4,), np.float64, 0.0)  # body-frame vx, vy, vz, wz
-        grow("vel", (4,), np.float64, 0.0)  # current body-frame velocity in VELOCITY mode
         self._plans.extend([None] * (cap - len(self._plans)))
 
     def add(self, row: int, kind: int, limits: MotionLimits) -> int:
@@ -182,6 +179,39 @@ class KinematicEngine:
         self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
         self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
 
+    # ----- checkpoints ----------------------------------------------------------------------
+
+    def get_state(self) -> dict[str, Any]:
+        """Every slot's motion: columns, paths, free slots (for ``sim.save_state``)."""
+        high = self._high
+        return {
+            "high": high,
+            "free": sorted(self._free),
+            "stopped": list(self._stopped),
+            "plans": list(self._plans[:high]),
+            "columns": {name: getattr(self, name)[:high].copy() for name in _COLUMNS},
+        }
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state` onto an engine whose slots hold the same store rows.
+
+        Raises:
+            ValueError: if the slots hold other rows (a simulation built differently).
+        """
+        high = state["high"]
+        rows = state["columns"]["row"]
+        if high != self._high or not np.array_equal(rows, self.row[:high]):
+            raise ValueError(
+                f"the checkpoint's motion slots ({high}) drive other objects than this "
+                f"simulation's ({self._high}): build it from the same scenario"
+            )
+        for name, values in state["columns"].items():
+            getattr(self, name)[:high] = values
+        self._free = list(state["free"])
+        heapq.heapify(self._free)
+        self._stopped = list(state["stopped"])
+        self._plans[:high] = list(state["plans"])
+
     # ----- queries ------------------------------------------------------------------------
 
     def is_moving(self, slot: int) -> bool:
@@ -208,14 +238,8 @@ class KinematicEngine:
         plan = self._plans[slot]
         if plan is None:
             return None
-        return Pose.from_arrays_unchecked(
-            self._plan_goal_position(slot, plan), plan.final_orientation.copy()
-        )
-
-    def _plan_goal_position(self, slot: int, plan: _Plan) -> np.ndarray:
-        if plan.waypoints:
-            return plan.waypoints[-1].position.copy()
-        return self.p1[slot].copy()
+        position = plan.waypoints[-1].position if plan.waypoints else self.p1[slot]
+        return Pose.from_arrays_unchecked(position.copy(), plan.final_orientation.copy())
 
     # ----- commands -----------------------------------------------------------------------
 
@@ -248,16 +272,7 @@ class KinematicEngine:
             self._interrupt(slot)
         if self.mode[slot] != _VELOCITY:
             # Start from the current motion so the command ramps within the accel limits.
-            row = self.row[slot]
-            yaw = float(yaw_from_quats(self._store.orientation[row][None, :])[0])
-            vx, vy, vz = self._store.velocity[row]
-            cos, sin = math.cos(yaw), math.sin(yaw)
-            self.vel[slot] = (
-                cos * vx + sin * vy,
-                -sin * vx + cos * vy,
-                vz,
-                self._store.angular_velocity[row][2],
-            )
+            self.vel[slot] = body_velocity(self._store, int(self.row[slot]))
         self.cmd[slot] = command
         self.mode[slot] = _VELOCITY
 
@@ -463,34 +478,7 @@ class KinematicEngine:
                     self._plan_next(slot)
 
     def _advance_velocity(self, s: np.ndarray, dt: float) -> None:
-        store = self._store
-        rows = self.row[s]
-        acc = np.concatenate([self.amax[s], self.alpha[s][:, 2:3]], axis=1) * dt
-        cap = np.concatenate([self.vmax[s], self.wmax[s][:, 2:3]], axis=1)
-        old = self.vel[s]
-        vel = old + np.clip(self.cmd[s] - old, -acc, acc)
-        vel = np.clip(vel, -cap, cap)
-        self.vel[s] = vel
-        # The velocity changes linearly within the step, so the step covers its mean: a start
-        # from rest moves a * dt^2 / 2, as the acceleration limit allows.
-        mean = 0.5 * (old + vel)
-        yaw = yaw_from_quats(store.orientation[rows])
-        mid = yaw + 0.5 * mean[:, 3] * dt
-        cos, sin = np.cos(mid), np.sin(mid)
-        world = np.stack(
-            [cos * mean[:, 0] - sin * mean[:, 1], sin * mean[:, 0] + cos * mean[:, 1], mean[:, 2]],
-            axis=1,
+        limits = (self.vmax[s], self.amax[s], self.wmax[s], self.alpha[s])
+        self.vel[s] = advance_velocity(
+            self._store, self.row[s], self.vel[s], self.cmd[s], limits, dt
         )
-        store.position[rows] += world * dt
-        new_yaw = yaw + mean[:, 3] * dt
-        half = 0.5 * new_yaw
-        store.orientation[rows] = np.stack(
-            [np.zeros_like(half), np.zeros_like(half), np.sin(half), np.cos(half)], axis=1
-        )
-        store.velocity[rows] = world
-        store.angular_velocity[rows] = np.stack(
-            [np.zeros_like(yaw), np.zeros_like(yaw), mean[:, 3]], axis=1
-        )
-        moving = np.any(vel != 0.0, axis=1) | np.any(old != 0.0, axis=1)
-        if moving.any():
-            store.mark_moved(rows[moving])

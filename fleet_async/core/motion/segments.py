@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -20,6 +21,7 @@ __all__ = [
     "EPS_LEN",
     "MotionLimits",
     "axis_cap",
+    "checked_limit",
     "heading_toward",
     "trapezoid_duration",
     "trapezoid_progress",
@@ -37,6 +39,25 @@ class MotionLimits:
     max_linear_accel: float | tuple[float, float, float]
     max_angular_vel: float | tuple[float, float, float]
     max_angular_accel: float | tuple[float, float, float]
+
+
+def checked_limit(value: Any, field: str) -> float | tuple[float, float, float]:
+    """A scalar or per-axis (x, y, z) limit, validated: every number finite (or ``inf``) and > 0.
+
+    Raises:
+        ValueError: naming ``field`` (e.g. ``"ControllerParams.max_linear_vel"``) and the value.
+    """
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not (math.isfinite(value) or value == math.inf) or value <= 0:
+            raise ValueError(f"{field}: expected a number > 0, got {value!r}")
+        return float(value)
+    try:
+        items = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: expected a number or [x, y, z], got {value!r}") from None
+    if len(items) != 3 or not all(v > 0 for v in items):
+        raise ValueError(f"{field}: expected 3 numbers > 0 (x, y, z), got {value!r}")
+    return (items[0], items[1], items[2])
 
 
 def heading_toward(

@@ -43,6 +43,16 @@ class SimPlugin:
     def on_reset(self) -> None:
         """Called after ``sim.reset()`` has cleared the world."""
 
+    def get_state(self) -> dict[str, Any]:
+        """What ``sim.save_state`` keeps of this plugin: its attributes (objects of the
+        simulation are saved by id). Override both methods if some attribute cannot be pickled
+        or must not be restored."""
+        return dict(vars(self))
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
+        vars(self).update(state)
+
 
 def as_plugin(
     plugin_or_cls: SimPlugin | type[SimPlugin],

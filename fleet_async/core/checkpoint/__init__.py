@@ -1,0 +1,40 @@
+"""Checkpoints: save a kinematic simulation and restore it into one built the same way.
+
+``sim.save_state(path)`` writes the state of a simulation between two steps; in a fresh
+process, ``sim.restore_state(path)`` on a simulation freshly built from the same scenario
+brings it to that state, and from there the two continue step for step identically (same
+poses, same events, same random numbers). A sweep can so branch many runs from one warmed-up
+state (``fleet-async sweep --checkpoint``).
+
+Saved: the clock (step count, collisions so far, paused); the random generator; every
+object's pose, velocity, angular velocity, collision mode, name and "moved since the last
+collision check" flag; attachments; the kinematic engine (paths in progress, segment
+progress, velocity commands); every action queue (queued and running actions with their
+progress, timers); each agent's controllers, agent plugins (battery) and joints; the
+simulation plugins; the schedules of callbacks and plugins; the collision system's active pairs
+and check schedule. Objects that actions, controllers or plugins refer to are saved by id.
+
+Not saved, and refused where it matters:
+
+- **missions**: a coroutine waiting mid-await cannot be saved, so ``save_state`` refuses while
+  ``fleet_async.run`` is in progress. Save before it starts or after it returns, and start new
+  missions after a restore (the actions they had queued are saved with the queues).
+- **physics**: PyBullet's dynamic state (contacts, solver) is not captured: ``physics=True`` is
+  refused on both sides.
+- **per-object callbacks** (``obj.register_callback``): refused.
+- **added motion systems** (``sim.add_motion_system``), among them the devices' (doors, lifts,
+  workcells, whose state lives in that system and in the devices): refused.
+- **callbacks** (``sim.register_callback``) are code: the restoring scenario registers the same
+  ones, in the same order; only their schedules are restored. The same holds for plugins,
+  controllers and agent plugins, whose state goes through their ``get_state`` / ``set_state``.
+- the KPI collector, recordings, the GUI and the monitor.
+
+Restoring checks that the target was built the same way (the same objects, of the same types,
+with the same ids, controllers and plugins, the same timestep) and has not stepped yet; it
+refuses otherwise, naming the difference. The file is a pickle: load only checkpoints you
+trust.
+
+``api.py`` is the simulation's side (``save_state`` / ``restore_state``), ``format.py`` the file
+(a header, then the state, pickled with objects by id), ``saving.py`` and ``restoring.py`` the
+two directions. May import ``sim`` and below; never ``metrics`` (its floor-mate).
+"""
