@@ -39,7 +39,7 @@ class Condition(SimEvent):
         for event in self._events:
             if not isinstance(event, SimEvent):
                 raise TypeError(f"any_of / all_of take sim events, got {event!r}")
-            if event.kernel is not kernel:
+            if event.kernel is not kernel and not event.rebind(kernel):
                 raise ValueError(f"{event!r} belongs to another run")
         if not self._events:
             self.succeed({})
@@ -50,6 +50,17 @@ class Condition(SimEvent):
             else:
                 event.callbacks.append(self._check)
         self.callbacks.append(self._build_value)  # type: ignore[union-attr]  # fresh event
+
+    def abandon(self, mission: Any) -> None:
+        """Its waiting mission was cancelled or interrupted: if nobody else waits on the
+        condition, stop watching its events and let each give up what its wait set up (a
+        request is withdrawn, an action cancelled), as if the mission had awaited it alone."""
+        if self.callbacks is None or len(self.callbacks) > 1:  # beyond _build_value
+            return
+        self.detach_checks()
+        for event in self._events:
+            if event.abandon is not None:
+                event.abandon(mission)
 
     def _check(self, event: SimEvent) -> None:
         if self.raw_value is not PENDING:

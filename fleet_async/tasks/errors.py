@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from fleet_async.core.missions import MissionError, NoMissionRuntimeError
+
 __all__ = [
     "ActionCancelledError",
     "ActionFailedError",
@@ -15,10 +17,6 @@ __all__ = [
     "MissionStalledError",
     "NoMissionRuntimeError",
 ]
-
-
-class MissionError(Exception):
-    """Base class of mission-layer errors."""
 
 
 class Cancelled(BaseException):  # named like trio's and anyio's cancellation
@@ -86,7 +84,3 @@ class MissionDeadlockError(MissionError):
 
 class MissionStalledError(MissionError):
     """A mission held the clock (a wall-clock or I/O wait) longer than the watchdog allows."""
-
-
-class NoMissionRuntimeError(MissionError, RuntimeError):
-    """A sim-time await was used outside a mission started by ``fleet_async.run``."""

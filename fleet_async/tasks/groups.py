@@ -81,13 +81,34 @@ class Nursery:
         return mission
 
     def child_done(self, mission: Mission, error: BaseException | None) -> None:
-        """A mission of this group ended (``error``: what it failed with, or None)."""
+        """A mission of this group ended (``error``: what it failed with, or None).
+
+        In a task group a failure cancels the group at once (anyio's rule). In the run's root
+        group (``sim.spawn``, SimPy's ``env.process``) it is first offered to whoever joins the
+        mission: it fails the run only if nobody awaited the mission when its end came.
+        """
         self.live -= 1
         if error is not None:
-            self.errors.append(error)
-            self.cancel_scope.cancel()
+            if self._owner is None:
+                self._fail_unless_joined(mission, error)
+            else:
+                self._fail(error)
         if self.live == 0 and self._join is not None and not self._join.triggered:
             self._join.succeed()
+
+    def _fail(self, error: BaseException) -> None:
+        self.errors.append(error)
+        self.cancel_scope.cancel()
+
+    def _fail_unless_joined(self, mission: Mission, error: BaseException) -> None:
+        waiters = mission.callbacks  # its end is scheduled: whoever joins it is in this list
+
+        def unless_joined(_: SimEvent) -> None:
+            if waiters is not None and len(waiters) == 1:  # nobody but this check
+                self._fail(error)
+
+        if waiters is not None:
+            waiters.append(unless_joined)
 
     def joined(self) -> SimEvent:
         """An event that triggers when no mission of the group is left."""
@@ -149,13 +170,14 @@ class TaskGroup:
                 self._scope.cancel()
                 interrupted = interrupted or raised
         nursery.closed = True
-        errors = [*([body_error] if body_error is not None else []), *nursery.errors]
-        if errors:
+        errors = [
+            *([body_error] if body_error is not None else []),
+            *([interrupted] if interrupted is not None else []),
+            *nursery.errors,
+        ]
+        if errors:  # an interrupt while waiting counts as the body's, as in the body itself
             self._scope.__exit__(None, None, None)
             raise BaseExceptionGroup("errors in a sim task group", errors)
-        if interrupted is not None:
-            self._scope.__exit__(None, None, None)
-            raise interrupted
         swallowed = self._scope.__exit__(exc_type, exc, tb)
         owner = self.kernel.current
         if exc is None and owner is not None and owner.scope.cancelled():

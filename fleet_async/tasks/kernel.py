@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import threading
 from collections.abc import Callable, Generator
 from typing import TYPE_CHECKING, Any
 
@@ -130,9 +131,14 @@ class SimEvent:
         self.raw_value = event.raw_value
         self.kernel.schedule(self)
 
+    def rebind(self, kernel: Kernel) -> bool:
+        """Join ``kernel``'s run if this event may (an Event made before the run); return
+        whether it belongs to ``kernel`` now."""
+        return self.kernel is kernel
+
     def __await__(self) -> Generator[Any, Any, Any]:
         kernel = self.kernel
-        if kernel.current is None:
+        if kernel.current is None or _thread() != kernel.thread:
             raise kernel.outside_error("awaiting a sim event")
         return (yield self)
 
@@ -186,6 +192,8 @@ class Kernel:
     ) -> None:
         self.now = now
         self.timestep = timestep
+        self.thread = threading.get_ident()
+        """The thread the run drives missions on; sim awaits from any other are errors."""
         """Sim seconds per step."""
         """The current step (the clock); only the driver advances it."""
         self.queue: list[tuple[int, int, int, SimEvent]] = []
@@ -208,8 +216,11 @@ class Kernel:
         """Missions alive, in start order."""
         self.on_failure: Callable[[Mission, BaseException], None] | None = None
         """Told about every mission that ends with an exception (not a cancellation)."""
-        self.host_cancel: type[BaseException] | tuple[type[BaseException], ...] = ()
-        """The host event loop's cancellation exception: it ends the run, not a mission."""
+        self.is_host_cancel: Callable[[BaseException], bool] = _never
+        """Whether an exception out of a mission is the host loop cancelling the run (which
+        ends the run, not just the mission); the driver installs its own test."""
+        self.dead = 0
+        """Queue entries that will resume nobody (timers of scopes that were left)."""
         self._what_is_outside = what_is_outside
         self._mission_ids = itertools.count()
 
@@ -234,6 +245,27 @@ class Kernel:
         """Whether an event is due now."""
         return bool(self.queue) and self.queue[0][0] <= self.now
 
+    def nothing_due(self) -> bool:
+        """Whether no queued event will ever resume anything."""
+        return len(self.queue) == self.dead
+
+    def disarm(self, timer: SimEvent) -> None:
+        """A timer nobody will wait on any more (a scope left before its deadline)."""
+        if timer.callbacks is not None and not timer.callbacks:
+            timer.callbacks = None  # the dispatch loop skips it and counts it off
+            self.dead += 1
+
+    def drop_due(self) -> None:
+        """Forget the events due now (``run(until=t)`` does not process those due at t)."""
+        kept = []
+        for entry in self.queue:
+            if entry[0] > self.now:
+                kept.append(entry)
+            elif entry[3].callbacks is None:
+                self.dead -= 1
+        heapq.heapify(kept)
+        self.queue[:] = kept
+
     def next_mission_id(self) -> int:
         """A fresh number for a new mission (its place in creation order)."""
         return next(self._mission_ids)
@@ -253,6 +285,12 @@ class Kernel:
 
     def outside_error(self, what: str) -> NoMissionRuntimeError:
         """The error for a sim-time await made outside a mission."""
+        if _thread() != self.thread:
+            return NoMissionRuntimeError(
+                f"{what} from another thread than the run's: sim events belong to the thread "
+                "that runs fleet_async.run; hand work over with anyio.from_thread.run_sync "
+                "(e.g. to set an Event)"
+            )
         if self.holding is not None:
             return NoMissionRuntimeError(
                 f"{what} was called from outside the missions while mission "
@@ -271,6 +309,13 @@ class Kernel:
         return Cancelled(f"cancelled at step {self.now}")
 
 
+_thread = threading.get_ident
+
+
+def _never(_: BaseException) -> bool:
+    return False
+
+
 def kernel_of(sim: Any, what: str) -> Kernel:
     """The kernel of the run in progress on ``sim``.
 
@@ -283,4 +328,6 @@ def kernel_of(sim: Any, what: str) -> Kernel:
             f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
         )
     kernel: Kernel = runtime.kernel
+    if _thread() != kernel.thread:
+        raise kernel.outside_error(what)
     return kernel

@@ -117,6 +117,23 @@ class Mission(SimEvent):
             raise RuntimeError(f"mission {self.name!r} cannot interrupt itself")
         self.kernel.schedule(Delivery(self.kernel, self, Interrupt(cause)), URGENT)
 
+    def _stray_scope_error(self, outcome: Any) -> RuntimeError:
+        """The mission ended inside a cancel scope it never left (an async generator left
+        suspended inside ``with sim.move_on_after(...)``): leave them, and say so."""
+        scope: CancelScope | None = self.scope
+        while scope is not None and scope is not self._root_scope:
+            scope.detach()
+            scope = scope.parent
+        self.scope = self._root_scope
+        error = RuntimeError(
+            f"mission {self.name!r} ended inside a cancel scope it entered and never left: an "
+            "async generator suspended inside 'with sim.move_on_after(...)' (or another sim "
+            "scope)? Close the generator ('await agen.aclose()') before leaving it"
+        )
+        if isinstance(outcome, BaseException):
+            error.__context__ = outcome
+        return error
+
     def close(self) -> None:
         """End it without resuming it (the run stops): its ``finally`` blocks run, without
         sim awaits. Counts as cancelled."""
@@ -161,7 +178,7 @@ class Mission(SimEvent):
                 self._end(True, stop.value)
                 return PARKED
             except BaseException as exc:
-                if kernel.host_cancel and isinstance(exc, kernel.host_cancel):
+                if kernel.is_host_cancel(exc):
                     self._end(False, exc, quietly=True)
                     raise  # the host cancelled the run; not this mission's failure
                 self._end(False, exc)
@@ -191,6 +208,8 @@ class Mission(SimEvent):
         kernel.current = None
         del kernel.missions[self]
         self.target = None
+        if self.scope is not self._root_scope and not quietly:
+            ok, value = False, self._stray_scope_error(value)
         self._root_scope.detach()
         if quietly:
             self.ok, self.raw_value = False, value
@@ -254,6 +273,11 @@ def _as_coroutine(fn: Any, args: tuple[Any, ...]) -> Any:
                 "not SimPy generators; write 'await sim.timeout(d)' for 'yield env.timeout(d)'"
             )
         raise TypeError(f"a mission must be an async function; {fn!r} returned {made!r}")
+    if inspect.isgenerator(fn):
+        raise TypeError(
+            f"{fn!r} is a generator: missions are async functions (async def), not SimPy "
+            "generators; write 'await sim.timeout(d)' for 'yield env.timeout(d)'"
+        )
     if args:
         raise TypeError(f"arguments were given, but {fn!r} is not callable")
     if inspect.iscoroutine(fn):
@@ -282,6 +306,9 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
     while queue and queue[0][0] <= kernel.now:
         event = heappop(queue)[3]
         callbacks = event.callbacks
+        if callbacks is None:  # a disarmed timer
+            kernel.dead -= 1
+            continue
         event.callbacks = None
         if not callbacks:
             continue

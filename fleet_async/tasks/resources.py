@@ -18,6 +18,7 @@ release, and the new holder resumes when it processes the grant (SimPy's order).
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from types import TracebackType
@@ -136,6 +137,7 @@ class Resource(Queueing):
         self.capacity = capacity
         self.users: list[Request] = []
         """Granted requests, in grant order."""
+        self._held: list[Request] = []  # taken by ``async with resource:`` blocks
 
     @property
     def queue(self) -> list[PutRequest]:
@@ -185,7 +187,8 @@ class Resource(Queueing):
         return request
 
     async def __aenter__(self) -> Resource:
-        await self.acquire()
+        request = await self.acquire()
+        self._held.append(request)
         return self
 
     async def __aexit__(
@@ -194,12 +197,16 @@ class Resource(Queueing):
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        self.release()
+        kernel = kernel_of(self.sim, "leaving 'async with resource'")
+        mine = [r for r in self._held if r.mission is kernel.current]
+        request = mine[-1] if mine else None
+        if request is not None:
+            self._held.remove(request)
+        self.release(request)  # a preempted holder's request is no longer a user: harmless
 
     def add_put(self, request: PutRequest) -> None:
-        """Queue a request in (priority, request step) order, stable."""
-        self.put_queue.append(request)
-        self.put_queue.sort(key=_request_key)
+        """Queue a request in (priority, request step) order, after its equals."""
+        bisect.insort_right(self.put_queue, request, key=_request_key)
 
     def try_put(self, request: Request) -> bool:
         """Grant ``request`` if a slot is free."""
@@ -315,9 +322,12 @@ class Container(Queueing):
         return False
 
     def restore(self, request: ContainerGet) -> None:  # type: ignore[override]  # its own gets
-        """Put back the amount a cancelled get took, and serve the gets again."""
-        self._level += request.amount
-        self.serve_gets()
+        """Give back the amount a cancelled get took: a put first in line (it waits for room,
+        so the level never exceeds the capacity)."""
+        give_back = ContainerPut(self, request.amount)
+        if not give_back.triggered:
+            self.put_queue.remove(give_back)
+            self.put_queue.insert(0, give_back)
 
     def try_get(self, request: ContainerGet) -> bool:
         """Take the amount if there is that much; go on only if it did."""

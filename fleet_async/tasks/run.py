@@ -10,6 +10,7 @@ MissionStalledError, and warns once after a second.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
 import sys
@@ -70,17 +71,25 @@ def run(
             wall-clock sleep) before MissionStalledError.
 
     Returns:
-        What ``main`` returned, or None when stopped by ``until`` before it returned.
+        What ``main`` returned (None if it was cancelled, or stopped by ``until`` before it
+        returned).
 
     Raises:
         BaseException: a mission's failure, as itself when it is the only one (with the
             mission's name and the sim time in its notes); several concurrent failures as an
             ExceptionGroup.
         MissionDeadlockError: missions are alive, no event is due ever and stepping cannot
-            help (without ``until``).
+            help (without ``until``, and unpaced: with ``target_rtf`` > 0 the clock keeps
+            running for the outside world to act).
         MissionStalledError: a mission held the clock longer than ``watchdog``.
     """
-    return anyio.run(_run_with_kwargs, sim, main, args, until, watchdog, backend=backend)
+    try:
+        return anyio.run(_run_with_kwargs, sim, main, args, until, watchdog, backend=backend)
+    except BaseExceptionGroup as group:  # the host loop's own wrapping of a lone Ctrl-C
+        lone = lone_error(group)
+        if isinstance(lone, KeyboardInterrupt):
+            raise lone from None
+        raise
 
 
 async def _run_with_kwargs(
@@ -100,34 +109,38 @@ async def run_async(
     until: float | None = None,
     watchdog: float = 30.0,
 ) -> Any:
-    """:func:`run` for code already inside an anyio event loop (asyncio or trio)."""
+    """:func:`run` for code already inside an anyio event loop (asyncio or trio).
+
+    If the run is stopped from outside (its host scope cancelled, Ctrl-C), the missions still
+    alive are closed (their ``finally`` blocks run) before the cancellation propagates.
+    """
     if not watchdog > 0:  # also rejects NaN
         raise ValueError(f"watchdog must be a positive number of wall seconds, got {watchdog!r}")
     if until is not None and not math.isfinite(until):
         raise ValueError(f"until must be a finite sim time, got {until!r}")
     runtime = Runtime(sim)
     sim.set_mission_runtime(runtime)
-    kernel = runtime.kernel
-    kernel.host_cancel = anyio.get_cancelled_exc_class()
     until_step = None if until is None else math.ceil(until / sim.params.timestep - 1e-9)
     driver = _Driver(runtime, until_step, watchdog)
+    runtime.kernel.is_host_cancel = driver.is_host_cancel
     try:
         main_mission = runtime.root.start(main, args, getattr(main, "__name__", "main"))
-        failure: Exception | None = None
+        failure: BaseException | None = None
         async with anyio.create_task_group() as host:
             host.start_soon(driver.watch, name="fleet_async watchdog")
             try:
                 with driver.scope:
                     await driver.drive()
-            except Exception as exc:  # the driver's own errors (a deadlock)
-                failure = exc
+            except BaseException as exc:  # re-raised below, unwrapped
+                failure = exc  # the driver's own error, or a stop from outside
             finally:
                 host.cancel_scope.cancel()
         failure = failure or driver.stalled
         if failure is not None:
-            _close_missions(runtime, f"the run failed: {failure}")
             raise failure
     finally:
+        if runtime.kernel.missions:  # still installed: their cleanup may release resources
+            _close_missions(runtime, "the run stopped early")
         sim.set_mission_runtime(None)
         runtime.close()
     errors = runtime.root.errors
@@ -135,7 +148,7 @@ async def run_async(
         raise lone_error(errors[0])
     if errors:
         raise BaseExceptionGroup("several missions failed", errors)
-    if driver.stopped_by_until or main_mission.cancelled:
+    if main_mission.is_alive or main_mission.cancelled:
         return None
     return main_mission.result()
 
@@ -149,7 +162,21 @@ class _Driver:
         self.watchdog = watchdog
         self.scope = anyio.CancelScope()
         self.stalled: MissionStalledError | None = None
-        self.stopped_by_until = False
+        self._cancel_exc = anyio.get_cancelled_exc_class()
+
+    def is_host_cancel(self, exc: BaseException) -> bool:
+        """Whether ``exc``, coming out of a mission's non-sim await, is the host loop
+        cancelling the run (rather than, on asyncio, a future some library cancelled)."""
+        if not isinstance(exc, self._cancel_exc):
+            return False
+        if self.scope.cancel_called:
+            return True
+        try:
+            task = asyncio.current_task()
+        except RuntimeError:  # trio: its Cancelled only ever means a real cancellation
+            return True
+        cancelling = getattr(task, "cancelling", None)
+        return cancelling is None or cancelling() > 0  # Python 3.10 cannot tell: the host
 
     async def drive(self) -> None:
         runtime, kernel, sim = self.runtime, self.runtime.kernel, self.runtime.sim
@@ -164,7 +191,8 @@ class _Driver:
             await dispatch(kernel)
             if not kernel.missions:
                 return
-            if self.until_step is None and not kernel.queue and not runtime.step_driven():
+            stuck = kernel.nothing_due() and not runtime.step_driven()
+            if stuck and self.until_step is None and rtf <= 0:
                 raise _deadlock(runtime)
             before = sim.step_count
             runtime.step()
@@ -177,14 +205,16 @@ class _Driver:
                 ahead = (sim.step_count - step0) * dt / rtf - (_wall_clock() - wall0)
                 if ahead > 0:
                     await _wall_sleep(ahead)
-            elif time.perf_counter() >= checkpoint_at:
+                    checkpoint_at = time.perf_counter() + _YIELD_EVERY
+            if time.perf_counter() >= checkpoint_at:  # behind real time, or unpaced
                 await anyio.lowlevel.checkpoint()
                 checkpoint_at = time.perf_counter() + _YIELD_EVERY
 
     async def _stop_at_until(self) -> None:
-        """Cancel every mission; let their cleanup run at this step (no more steps)."""
-        self.stopped_by_until = True
+        """Cancel every mission; let their cleanup run at this step (no more steps). The
+        events that were due at this step are not processed (SimPy's ``run(until=t)``)."""
         kernel = self.runtime.kernel
+        kernel.drop_due()
         self.runtime.root.cancel_scope.cancel()
         await dispatch(kernel)
         if kernel.missions:

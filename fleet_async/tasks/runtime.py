@@ -46,7 +46,7 @@ class Runtime:
         self.action_waits: dict[int, ActionWait] = {}
         self.predicates: dict[int, PredicateWait] = {}
         self.bus_waits: dict[str, dict[int, BusWait]] = {}
-        self.streams_waiting = 0
+        self.streams: list[EventStream] = []
         self._outcomes: list[tuple[int, int, ActionWait]] = []
         self._bus_handlers: dict[str, Callable[..., None]] = {}
         self.kernel.on_failure = self._on_mission_failed
@@ -61,6 +61,8 @@ class Runtime:
         for name, handler in self._bus_handlers.items():
             events.off(name, handler)
         self._bus_handlers.clear()
+        for stream in self.streams:
+            stream.close()
 
     # ----- the step bracket (called by the driver) ---------------------------------------------
 
@@ -80,17 +82,18 @@ class Runtime:
                 kernel.schedule(wait, STEP)
         if self.predicates:
             for key, pending in list(self.predicates.items()):
-                if pending.predicate():
+                if pending.callbacks and pending.predicate():
                     del self.predicates[key]
                     pending.succeed()
 
     def step_driven(self) -> bool:
-        """Whether stepping can end a wait (an action, a predicate, a bus event)."""
+        """Whether stepping can end something a mission waits on (an action, a predicate, a
+        bus event, a stream item)."""
         return bool(
             self.action_waits
-            or self.predicates
-            or self.streams_waiting
-            or any(self.bus_waits.values())
+            or any(wait.callbacks for wait in self.predicates.values())
+            or any(stream.waiting for stream in self.streams)
+            or any(wait.callbacks for table in self.bus_waits.values() for wait in table.values())
         )
 
     def outcome(self, wait: ActionWait) -> None:
@@ -182,8 +185,10 @@ class Runtime:
         return BusWait(self, name, where)
 
     def event_stream(self, name: str, where: Callable[..., bool] | None) -> EventStream:
-        """An async iterator over matching bus events."""
-        return EventStream(self, name, where)
+        """An async iterator over matching bus events (closed when the run ends)."""
+        stream = EventStream(self, name, where)
+        self.streams.append(stream)
+        return stream
 
     def task_group(self) -> TaskGroup:
         """A new task group of missions."""

@@ -198,6 +198,7 @@ class CancelScope:
         timer, self._timer = self._timer, None
         if timer is not None and timer.callbacks:
             timer.callbacks.remove(self._fire)
+            self.kernel.disarm(timer)
 
     def _fire(self, _: SimEvent) -> None:
         self._timer = None

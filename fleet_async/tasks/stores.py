@@ -82,9 +82,12 @@ class Store(Queueing):
         return request.filter is not None
 
     def restore(self, request: StoreGet) -> None:  # type: ignore[override]  # its own gets
-        """Put the item a cancelled get took back in front, and serve the gets again."""
-        self.items.insert(0, request.raw_value)
-        self.serve_gets()
+        """Give back the item a cancelled get took: a put first in line (it waits for room,
+        so the store never holds more than its capacity)."""
+        give_back = StorePut(self, request.raw_value)
+        if not give_back.triggered:
+            self.put_queue.remove(give_back)
+            self.put_queue.insert(0, give_back)
 
     def _add(self, item: Any) -> None:
         self.items.append(item)
@@ -130,11 +133,6 @@ class PriorityStore(Store):
         if self.items:
             request.succeed(heapq.heappop(self.items))
         return False
-
-    def restore(self, request: StoreGet) -> None:  # type: ignore[override]  # its own gets
-        """Put the item a cancelled get took back, and serve the gets again."""
-        heapq.heappush(self.items, request.raw_value)
-        self.serve_gets()
 
     def _add(self, item: Any) -> None:
         heapq.heappush(self.items, item)

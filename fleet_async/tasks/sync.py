@@ -69,9 +69,31 @@ class Event(SimEvent):
 
     def fail(self, exception: BaseException) -> Event:
         """Trigger it with an exception, which its waiters raise."""
+        if self._sim.mission_runtime is None:  # no run: nobody can be waiting
+            if self.raw_value is not PENDING:
+                raise RuntimeError(f"{self!r} has already been triggered")
+            if not isinstance(exception, BaseException):
+                raise TypeError(f"fail() expects an exception, got {exception!r}")
+            self.ok, self.raw_value, self.callbacks = False, exception, None
+            return self
         self._bind("Event.fail")
         super().fail(exception)
         return self
+
+    def rebind(self, kernel: Kernel) -> bool:
+        """An Event made before this run joins it when a condition takes it."""
+        runtime = self._sim.mission_runtime
+        if runtime is not None and runtime.kernel is kernel:
+            self._bind("sim.any_of / sim.all_of")
+        return self.kernel is kernel
+
+    def __or__(self, other: SimEvent) -> SimEvent:
+        self._bind("Event | ...")
+        return super().__or__(other)
+
+    def __and__(self, other: SimEvent) -> SimEvent:
+        self._bind("Event & ...")
+        return super().__and__(other)
 
     def wait(self) -> Event:
         """``await event.wait()``: wait until it is set (returns its value)."""
@@ -93,33 +115,40 @@ _NO_KERNEL = _NoKernel()
 
 class EventStream:
     """``async for payload in sim.events.stream(name, where=...)``: every matching bus event,
-    in order, from subscription until ``close()`` (or leaving an ``async with`` block)."""
+    in order, from subscription until ``close()`` (leaving an ``async with`` block, or the end
+    of the run). Several missions may read one stream: each item goes to one reader, the one
+    that has waited longest."""
 
     def __init__(self, runtime: Any, name: str, where: Callable[..., bool] | None) -> None:
         self._runtime = runtime
         self._name = name
         self._where = where
         self._buffer: deque[dict[str, Any]] = deque()
-        self._waiter: SimEvent | None = None
+        self._waiters: deque[_StreamWait] = deque()
         self._closed = False
         runtime.sim.events.on(name, self._on_event, priority=1_000_000)
+
+    @property
+    def waiting(self) -> bool:
+        """Whether a mission waits for the next item."""
+        return bool(self._waiters)
 
     def _on_event(self, **payload: Any) -> None:
         if self._where is not None and not self._where(**payload):
             return
-        waiter = self._waiter
-        if waiter is not None:
-            self._waiter = None
-            self._runtime.streams_waiting -= 1
-            waiter.succeed(dict(payload))
+        if self._waiters:
+            self._waiters.popleft().succeed(dict(payload))
         else:
             self._buffer.append(dict(payload))
 
     def close(self) -> None:
-        """Stop listening."""
-        if not self._closed:
-            self._closed = True
-            self._runtime.sim.events.off(self._name, self._on_event)
+        """Stop listening; missions waiting for an item end their ``async for``."""
+        if self._closed:
+            return
+        self._closed = True
+        self._runtime.sim.events.off(self._name, self._on_event)
+        while self._waiters:
+            self._waiters.popleft().succeed(_END)
 
     def __aiter__(self) -> EventStream:
         return self
@@ -130,22 +159,27 @@ class EventStream:
         if self._closed:
             raise StopAsyncIteration
         waiter = _StreamWait(self._runtime.kernel, self)
-        self._waiter = waiter
-        self._runtime.streams_waiting += 1
-        payload: dict[str, Any] = await waiter
-        return payload
+        self._waiters.append(waiter)
+        payload: Any = await waiter
+        if payload is _END:
+            raise StopAsyncIteration
+        result: dict[str, Any] = payload
+        return result
 
-    def abandon(self, waiter: SimEvent) -> None:
-        """Its waiting mission gave up (cancelled or interrupted)."""
-        if self._waiter is waiter:
-            self._waiter = None
-            self._runtime.streams_waiting -= 1
+    def abandon(self, waiter: _StreamWait) -> None:
+        """A waiting mission gave up (cancelled or interrupted)."""
+        if waiter in self._waiters:
+            self._waiters.remove(waiter)
 
     async def __aenter__(self) -> EventStream:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
         self.close()
+
+
+_END: Any = object()
+"""What a closed stream hands its waiting readers."""
 
 
 class _StreamWait(SimEvent):

@@ -64,9 +64,10 @@ class ActionWait(SimEvent):
             self.kernel.schedule(self)
 
     def abandon(self, mission: Any) -> None:
+        """Its only waiter stopped waiting: cancel the action (whose end then settles this
+        event, so awaiting it again raises ActionCancelledError)."""
         if self.callbacks or self.action.is_complete():
             return  # another mission still waits on it, or it is over
-        self._runtime.action_waits.pop(id(self.action), None)
         self.action.cancel()
 
     # ----- the handle -----------------------------------------------------------------------
@@ -114,8 +115,9 @@ class ActionWait(SimEvent):
 
 
 class PredicateWait(SimEvent):
-    """``sim.wait_until(predicate)``: succeeds after the first step at whose end the
-    predicate holds."""
+    """``sim.wait_until(predicate)``: succeeds at once if the predicate holds, else after the
+    first step at whose end it holds while something waits on it (a predicate nobody awaits,
+    such as one that lost an ``any_of``, is not evaluated)."""
 
     __slots__ = ("_runtime", "predicate")
 
@@ -129,7 +131,9 @@ class PredicateWait(SimEvent):
             runtime.predicates[id(self)] = self
 
     def abandon(self, mission: Any) -> None:
-        self._runtime.predicates.pop(id(self), None)
+        """Its only waiter stopped waiting: stop checking the predicate."""
+        if not self.callbacks:
+            self._runtime.predicates.pop(id(self), None)
 
 
 class BusWait(SimEvent):
@@ -146,4 +150,6 @@ class BusWait(SimEvent):
         runtime.add_bus_wait(self)
 
     def abandon(self, mission: Any) -> None:
-        self._runtime.bus_waits.get(self.name, {}).pop(id(self), None)
+        """Its only waiter stopped waiting: stop listening."""
+        if not self.callbacks:
+            self._runtime.bus_waits.get(self.name, {}).pop(id(self), None)

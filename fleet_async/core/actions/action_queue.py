@@ -269,6 +269,7 @@ class ActionQueue:
         if queue is not None and any(a is action for a in queue):
             queue.remove(action)
             action.end_time = self._sim.sim_time
+            self._emit(SimEvents.ACTION_FAILED, agent, action)  # whoever waits on it learns
             return
         if self._current.get(key) is not action:
             return

@@ -28,6 +28,7 @@ from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.missions.agent_missions import AgentMissionApi
+from fleet_async.core.missions.errors import MissionError, NoMissionRuntimeError
 from fleet_async.core.missions.hooks import mission_hook, register_mission_hook
 from fleet_async.core.missions.mission_api import MissionRuntime, SimEventBus, SimMissionApi
 
@@ -45,8 +46,10 @@ __all__ = [
     "ActionStatus",
     "AgentMissionApi",
     "DeviceEvents",
+    "MissionError",
     "MissionRuntime",
     "MoveAction",
+    "NoMissionRuntimeError",
     "SimEventBus",
     "SimEvents",
     "SimMissionApi",

@@ -19,6 +19,7 @@ from fleet_async.core.actions.arm_actions import JointAction, PoseAction
 from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
+from fleet_async.core.missions.errors import NoMissionRuntimeError
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -38,7 +39,7 @@ class AgentMissionApi:
         sim = agent.sim_core
         runtime = None if sim is None else sim.mission_runtime
         if runtime is None:
-            raise RuntimeError(
+            raise NoMissionRuntimeError(
                 f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
             )
         return runtime

@@ -19,6 +19,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING, Any, Protocol
 
 from fleet_async.core.base.events import EventBus
+from fleet_async.core.missions.errors import NoMissionRuntimeError
 
 if TYPE_CHECKING:
     from fleet_async.core.actions.action import Action
@@ -49,8 +50,8 @@ class MissionRuntime(Protocol):
     def mission_rng(self) -> Any: ...
 
 
-def _no_runtime(what: str) -> RuntimeError:
-    return RuntimeError(
+def _no_runtime(what: str) -> NoMissionRuntimeError:
+    return NoMissionRuntimeError(
         f"{what} needs a running mission: start missions with fleet_async.run(sim, main) "
         "(or await fleet_async.run_async(sim, main) inside an event loop)"
     )
