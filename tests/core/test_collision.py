@@ -305,3 +305,51 @@ def test_box_fast_path_matches_pybullet_with_sizes_offsets_and_rotations():
                 if p.getClosestPoints(a.body_id, b.body_id, 0.03, physicsClientId=sim.client):
                     expected.append((a.object_id, b.object_id))
         assert pairs == sorted(expected) and len(expected) > 10
+
+
+def _brute_force_pairs(amin, amax, flat, moved):
+    """Every overlapping pair (i < j) with a moved side, by broadcasting (any n)."""
+    out = []
+    for i in range(len(amin) - 1):
+        j = np.arange(i + 1, len(amin))
+        sep = (amin[i] > amax[j]) | (amin[j] > amax[i])
+        sep[:, 2] &= ~(flat[i] | flat[j])
+        hit = j[~sep.any(axis=1) & (moved[i] | moved[j])]
+        out += [(i, int(k)) for k in hit]
+    return out
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_broad_phase_hash_table_path_matches_brute_force(seed):
+    # Enough objects that equal cell keys are found with the hash table, not by sorting, and
+    # crowded enough that many cells hold three or more objects.
+    rng = np.random.default_rng(100 + seed)
+    n = 3000
+    center = rng.uniform(-5, 5, (n, 3)) * [1, 1, 0.05]
+    size = rng.uniform(0.05, 0.3, (n, 3))
+    size[rng.random(n) < 0.01] *= 15
+    amin, amax = center - size, center + size
+    flat = rng.random(n) < (0.25 if seed else 0.0)
+    moved = rng.random(n) < 0.4
+    idx = candidate_pairs(amin, amax, flat if flat.any() else None, moved, 0.6, 1.5)
+    assert len(np.unique(idx, axis=0)) == len(idx)
+    assert (idx[:, 0] < idx[:, 1]).all()
+    ignore_z = flat[idx[:, 0]] | flat[idx[:, 1]]
+    kept = idx[
+        aabb_overlap(amin[idx[:, 0]], amax[idx[:, 0]], amin[idx[:, 1]], amax[idx[:, 1]], ignore_z)
+    ]
+    assert [tuple(x) for x in kept.tolist()] == _brute_force_pairs(amin, amax, flat, moved)
+
+
+def test_one_cell_objects_and_a_quiet_check():
+    # Objects far smaller than the cell (each in exactly one cell), then a check with nothing
+    # moved: no work, the same active pairs, no events.
+    with make_sim(spatial_hash_cell_size_mode="constant", spatial_hash_cell_size=5.0) as sim:
+        objs = [cube(sim, 0.19 * i, y=0.5) for i in range(6)]
+        started = []
+        sim.events.on(SimEvents.COLLISION_STARTED, lambda obj_a, obj_b, **_: started.append(1))
+        sim.step_once()
+        pairs = sim.get_active_collision_pairs()
+        assert pairs == [(objs[i].object_id, objs[i + 1].object_id) for i in range(5)]
+        sim.step_once()
+        assert sim.get_active_collision_pairs() == pairs and len(started) == 5

@@ -155,6 +155,8 @@ class SimObject:
         """Per-entity event bus, created on first access."""
         if self._events is None:
             self._events = EventBus()
+            if self.sim_core is not None:
+                self.sim_core.world.on_event_bus_created()
         return self._events
 
     def has_event_bus(self) -> bool:
@@ -177,8 +179,7 @@ class SimObject:
         if mode is self._collision_mode:
             return
         old, self._collision_mode = self._collision_mode, mode
-        self._store.collision_mode[self._row] = COLLISION_CODES[mode.value]
-        self._store.moved[self._row] = True
+        self._store.set_collision_code(self._row, COLLISION_CODES[mode.value])
         if self.sim_core is not None:
             self.sim_core.world.on_collision_mode_changed(self, old, mode)
 

@@ -389,7 +389,7 @@ class SimulationKernel(SimMissionApi, CollisionApi):
 
     def _phase_collision(self) -> None:
         if self._collision.is_due(self._step_count, self._params.timestep):
-            self._collision.check()
+            self._collision.run()
 
     def _phase_post_step(self) -> None:
         self._step_count += 1

@@ -49,6 +49,11 @@ class SimulationParams:
         max_steps_per_frame: Steps run back to back to catch up when pacing falls behind.
         gui_min_fps: Minimum GUI redraw rate while pacing.
         seed: Seed of the simulation's random generator (``sim.rng``).
+        collision_sweep: Also report pairs that touched between two checks while neither pair
+            of poses touches (each object taken to move on the straight line between its
+            positions at the two checks; its orientation is the one at the check). Catches a
+            fast robot passing through another within one step; off by default (it costs a
+            swept broad phase; see docs/performance.md).
     """
 
     target_rtf: float = 1.0
@@ -86,6 +91,7 @@ class SimulationParams:
     monitor_x: int = -1
     monitor_y: int = -1
     seed: int = 0
+    collision_sweep: bool = False
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(

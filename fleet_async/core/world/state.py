@@ -56,6 +56,9 @@ class KinematicState:
         self.moved = np.zeros(capacity, dtype=bool)
         self._free: list[int] = []
         self._high_water = 0
+        self.layout_version = 0
+        """Bumped whenever a row is claimed or freed or changes collision mode (lets the
+        collision system skip re-scanning the rows when nothing of the kind happened)."""
 
     @property
     def capacity(self) -> int:
@@ -100,6 +103,7 @@ class KinematicState:
         self.active[row] = True
         self.dirty[row] = False
         self.moved[row] = True
+        self.layout_version += 1
         return row
 
     def allocate_many(
@@ -132,6 +136,7 @@ class KinematicState:
         self.active[rows] = True
         self.dirty[rows] = False  # freshly created bodies already sit at this pose in PyBullet
         self.moved[rows] = True  # but the collision system has not seen them yet
+        self.layout_version += 1
         return rows
 
     def release(self, row: int) -> None:
@@ -144,6 +149,7 @@ class KinematicState:
         self.body_id[row] = -1
         self.object_id[row] = -1
         heapq.heappush(self._free, int(row))
+        self.layout_version += 1
 
     def clear(self) -> None:
         """Free every row (used by ``reset``); capacity is kept."""
@@ -154,6 +160,13 @@ class KinematicState:
         self.object_id[:] = -1
         self._free.clear()
         self._high_water = 0
+        self.layout_version += 1
+
+    def set_collision_code(self, row: int, code: int) -> None:
+        """Change a row's collision mode code (and flag it moved, so its pairs are re-checked)."""
+        self.collision_mode[row] = code
+        self.moved[row] = True
+        self.layout_version += 1
 
     def mark_moved(self, rows: int | np.ndarray) -> None:
         """Flag rows whose pose changed: stale in PyBullet, unseen by the collision system."""

@@ -65,6 +65,7 @@ class World:
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._saved_mass: dict[int, float] = {}
         self._next_id = 0
+        self._entity_buses = False
         self.in_step = False
 
     @property
@@ -96,6 +97,16 @@ class World:
     def agent_count(self) -> int:
         """Number of agents."""
         return len(self._agents)
+
+    @property
+    def has_entity_buses(self) -> bool:
+        """Whether any object of this simulation has ever had its own event bus (emitters of
+        per-object events can skip building payloads while none has)."""
+        return self._entity_buses
+
+    def on_event_bus_created(self) -> None:
+        """An object of this simulation created its event bus (``obj.events``)."""
+        self._entity_buses = True
 
     def get(self, object_id: int) -> SimObject | None:
         """The object with ``object_id``, or None."""
@@ -163,6 +174,8 @@ class World:
             self._updaters[object_id] = obj
         if obj.has_callbacks():
             self._with_callbacks[object_id] = obj
+        if obj.has_event_bus():
+            self._entity_buses = True
         if dynamic:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
