@@ -106,5 +106,5 @@ def test_bad_arguments_are_rejected():
 
 def test_sim_events_lists_every_name_once():
     names = SimEvents.all()
-    assert len(names) == len(set(names)) == 15
+    assert len(names) == len(set(names)) == 16
     assert SimEvents.PRE_STEP in names and SimEvents.ACTION_FAILED in names

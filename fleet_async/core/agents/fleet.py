@@ -87,6 +87,17 @@ class FleetMotion:
         # Last: a wait that ends with this step has covered all of it (a charge charged).
         self.actions.expire(self._sim.sim_time + dt, dt)
 
+    def idle_steps(self, step: int, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) change no agent: nothing moves,
+        no per-agent controller or plugin runs, and no action is due (see ActionQueue)."""
+        if self._controlled or self._plugged or not self.engine.is_idle():
+            return 0
+        return self.actions.idle_steps(step, self._sim.params.timestep, limit)
+
+    def skip(self, last_step: int) -> None:
+        """Steps up to ``last_step`` were skipped as empty."""
+        self.actions.skip(last_step * self._sim.params.timestep)
+
     def motion_ended(self, agent: Agent, reached: bool) -> None:
         """Record that ``agent`` stopped and wake an action waiting for it.
 

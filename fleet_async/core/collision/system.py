@@ -38,6 +38,7 @@ _STATIC = COLLISION_CODES["static"]
 _DISABLED = COLLISION_CODES["disabled"]
 _FLAT = COLLISION_CODES["normal_2d"]
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)
+_NO_ROWS = np.empty(0, dtype=np.int64)
 
 
 class CollisionSystem:
@@ -106,23 +107,32 @@ class CollisionSystem:
         self._next_due_step = step + max(1, round(1.0 / (self.frequency * timestep)))
         return True
 
-    def due_within(self, step: int, limit: int) -> int:
-        """How many of the steps ``step, step + 1, ...`` (at most ``limit``) pass without a
-        check falling due, without advancing the schedule."""
-        if self.frequency is None:
-            return 0
+    def idle_steps(self, step: int, limit: int) -> int:
+        """How many of the steps ``step, step + 1, ...`` (at most ``limit``) need no check:
+        all of them when nothing moved and no row joined or left since the last check (a
+        check would find nothing new), else those before the next check falls due."""
         if self.frequency == 0:
             return limit
+        store = self._sim.state
+        if store.layout_version == self._layout and not np.count_nonzero(
+            store.moved[: store.high_water]
+        ):
+            return limit
+        if self.frequency is None:
+            return 0
         return max(0, min(limit, self._next_due_step - step))
 
     def skip(self, step: int, n: int, timestep: float) -> None:
-        """Advance the schedule over ``n`` steps from ``step`` in which nothing moved: a check
-        due among them would have found nothing new, so only its time is kept."""
-        if self.frequency is None or not self.frequency or step + n <= self._next_due_step:
+        """Advance the schedule over ``n`` empty steps from ``step`` as if they had run: a
+        check falling due among them would have found nothing new, so only its time counts."""
+        if self.frequency is None or not self.frequency:
+            return
+        first = max(step, self._next_due_step)
+        end = step + n - 1
+        if first > end:
             return
         period = max(1, round(1.0 / (self.frequency * timestep)))
-        last = self._next_due_step + ((step + n - 1 - self._next_due_step) // period) * period
-        self._next_due_step = last + period
+        self._next_due_step = first + ((end - first) // period) * period + period
 
     def reset(self) -> None:
         """Forget every registration and active pair (simulation reset)."""
@@ -148,7 +158,8 @@ class CollisionSystem:
         self._relaid = store.layout_version != self._layout
         if self._relaid:
             self._relayout()
-        moved = np.flatnonzero(store.moved[:high])
+        flags = store.moved[:high]
+        moved = np.flatnonzero(flags) if np.count_nonzero(flags) else _NO_ROWS
         # Most rows moved and none is special: one pass over every row beats gathers.
         whole = self._plain and 4 * len(moved) >= high
         if len(moved) and not (whole and self.geometry.refresh_all(high, store)):

@@ -175,6 +175,11 @@ class KinematicEngine:
 
     # ----- queries ------------------------------------------------------------------------
 
+    def is_idle(self) -> bool:
+        """Whether the next ``advance`` would change nothing: no slot follows a path or a
+        velocity command, and no slot that just arrived still has its velocity to zero."""
+        return not self._stopped and not np.count_nonzero(self.mode[: self._high])
+
     def is_moving(self, slot: int) -> bool:
         """Whether the slot follows a path or a non-zero velocity command."""
         mode = self.mode[slot]
@@ -390,6 +395,8 @@ class KinematicEngine:
                 self._store.angular_velocity[rows] = 0.0
                 self.carry[idle] = 0.0
         mode = self.mode[: self._high]
+        if not np.count_nonzero(mode):  # every slot idle: nothing to integrate
+            return
         pose_slots = np.flatnonzero(mode == _POSE)
         if len(pose_slots):
             self._advance_pose(pose_slots, dt)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 
@@ -35,9 +35,11 @@ from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
 from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
+from fleet_async.core.sim.idle import IdleSteps
 from fleet_async.core.sim.params import SimulationParams
-from fleet_async.core.sim.plugins import SimPlugin, as_plugin
+from fleet_async.core.sim.plugins import SimPlugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
+from fleet_async.core.sim.registry import MotionSystem, RegistryApi
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.state import KinematicState
@@ -55,14 +57,7 @@ _LOG_LEVELS = {"debug": 10, "info": 20, "warn": 30, "warning": 30, "error": 40, 
 _Sim = TypeVar("_Sim", bound="SimulationKernel")
 
 
-class MotionSystem(Protocol):
-    """Something that advances many objects per step (e.g. a vectorised controller)."""
-
-    def advance(self, dt: float) -> None:
-        """Move every object this system owns by one step of ``dt`` seconds."""
-
-
-class SimulationKernel(SimMissionApi, CollisionApi):
+class SimulationKernel(RegistryApi, SimMissionApi, CollisionApi):
     """The clock, the step loop and what it moves (objects, agents, plugins, managers).
 
     Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
@@ -109,6 +104,17 @@ class SimulationKernel(SimMissionApi, CollisionApi):
             self._params.profiling_interval, self._params.enable_time_profiling
         )
         self._memory = MemoryProfiler(self._params.enable_memory_profiling)
+        self._idle = IdleSteps(
+            self._params.timestep,
+            self.events,
+            (self._callbacks, self._plugin_schedule),
+            self._world,
+            self._fleet,
+            self._collision,
+            lambda: self._motion_systems,
+            self._joint_motion,
+            lambda: self._backend.is_gui or self._params.physics or self._profiler.log_summary,
+        )
         self._phases: tuple[tuple[str, Callable[[], None]], ...] = (
             ("events_pre_step", self._phase_pre_step),
             ("callbacks", self._phase_callbacks),
@@ -264,70 +270,6 @@ class SimulationKernel(SimMissionApi, CollisionApi):
         """
         return self._world.get_poses(object_ids)
 
-    # ----- callbacks, plugins, managers, motion systems -----------------------------------
-
-    def register_callback(
-        self,
-        callback: Callable[[MultiRobotSimulationCore, float], Any],
-        frequency: float | None = None,
-    ) -> None:
-        """Call ``callback(sim, dt)`` every step (None) or at ``frequency`` Hz of sim time."""
-        self._callbacks.add(callback, frequency, owner="register_callback")
-
-    def unregister_callback(self, callback_func: Callable[..., Any]) -> bool:
-        """Remove a callback; return whether it was registered."""
-        return self._callbacks.remove(callback_func)
-
-    def register_plugin(
-        self,
-        plugin_or_cls: SimPlugin | type[SimPlugin],
-        config: dict[str, Any] | None = None,
-        frequency: float | None = None,
-    ) -> SimPlugin:
-        """Register a plugin instance, or instantiate a SimPlugin subclass with ``config``.
-
-        Raises:
-            TypeError: if the argument is not a SimPlugin or SimPlugin subclass.
-            ValueError: if ``config`` is given with an instance.
-        """
-        plugin = as_plugin(plugin_or_cls, cast("MultiRobotSimulationCore", self), config)
-        freq = frequency if frequency is not None else plugin.frequency
-        self._plugin_schedule.add(
-            plugin.on_step, freq, owner=f"register_plugin({type(plugin).__name__})"
-        )
-        self._plugins.append(plugin)
-        plugin.on_init()
-        return plugin
-
-    def register_manager(self, manager: Any) -> None:
-        """Keep ``manager`` in sync with removals and resets; duplicate calls are ignored."""
-        if any(m is manager for m in self._managers):
-            return
-        manager.sim_core = self
-        self._managers.append(manager)
-
-    def unregister_manager(self, manager: Any) -> bool:
-        """Forget a manager; return whether it was registered."""
-        for i, m in enumerate(self._managers):
-            if m is manager:
-                del self._managers[i]
-                return True
-        return False
-
-    def get_manager(self, name: str) -> Any | None:
-        """The registered manager called ``name``, or None."""
-        return next((m for m in self._managers if getattr(m, "name", None) == name), None)
-
-    def add_motion_system(self, system: MotionSystem) -> None:
-        """Advance ``system`` in every step's motion phase (vectorised controllers)."""
-        if system not in self._motion_systems:
-            self._motion_systems.append(system)
-
-    def remove_motion_system(self, system: MotionSystem) -> None:
-        """Stop advancing ``system``."""
-        if system in self._motion_systems:
-            self._motion_systems.remove(system)
-
     # ----- the step loop ------------------------------------------------------------------
 
     def step_once(self, return_profiling: bool = False) -> dict[str, float] | None:
@@ -355,6 +297,66 @@ class SimulationKernel(SimMissionApi, CollisionApi):
         finally:
             self._world.in_step = False
         return timings if return_profiling else None
+
+    def idle_steps(self, limit: int) -> int:
+        """How many of the next steps (at most ``limit``) are provably empty.
+
+        A step is empty when running it would change nothing but the clock: no body moves or
+        is due to (no path or velocity command in the kinematic engine, no joint moving, no
+        agent that just stopped still to have its velocity zeroed), no high-level controller,
+        agent plugin or ``update(dt)`` override runs, no callback, plugin or per-object
+        callback is due, no action is due to start, be polled or time out, no collision check
+        has anything new to examine (nothing moved and no object joined or left since the last
+        check), nothing is subscribed to PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE (a
+        running recorder is such a subscriber), no body waits to be created, and neither the
+        GUI, ``physics=True``, step-timing logs nor a motion system other than the built-in
+        ones needs every step. Action and collision events, the monitor (fed once per frame by
+        ``run_simulation``) and the mission runtime's own timers do not count: the mission
+        driver combines this answer with its next timer itself.
+
+        The answer only depends on the simulation's state, so it stays true until something
+        changes it (a command, a pose write, a registration); skip the steps at once.
+
+        Args:
+            limit: The most steps to look ahead (>= 0).
+
+        Returns:
+            ``k`` in ``[0, limit]``: the steps ``step_count .. step_count + k - 1`` are empty;
+            ``sim.skip_steps(k)`` then gives exactly the state ``k`` calls of ``step_once()``
+            would. 0 while paused or before the first step.
+        """
+        if self._paused or not self._initialized:
+            return 0
+        return self._idle.count(self._step_count, int(limit))
+
+    def skip_steps(self, n: int) -> None:
+        """Advance the clock over ``n`` empty steps as if ``step_once()`` had run ``n`` times.
+
+        ``step_count`` grows by ``n`` and ``sim_time`` stays ``step_count * timestep``;
+        callbacks, plugins, per-object callbacks, action timers and collision checks keep
+        their exact schedules (none of them was due in the span, or a collision check that
+        was due would have found nothing new). Emits ``STEPS_SKIPPED`` (``sim``, ``step``: the
+        first skipped step, ``count``: ``n``, ``sim_time``: after the span) for recorders of
+        the span; no per-step event is emitted.
+
+        Raises:
+            ValueError: if ``n`` is negative or more than ``idle_steps(n)`` (one of the steps
+                is not provably empty).
+        """
+        if n < 0 or self.idle_steps(n) < n:
+            raise ValueError(
+                f"skip_steps: {n} steps are not provably empty from step {self._step_count} "
+                f"(idle_steps says {max(self.idle_steps(max(n, 0)), 0)}); run step_once()"
+            )
+        if n == 0:
+            return
+        first = self._step_count
+        self._idle.skip(first, n)
+        self._step_count += n
+        if self.events.has_handlers(SimEvents.STEPS_SKIPPED):
+            self.events.emit(
+                SimEvents.STEPS_SKIPPED, sim=self, step=first, count=n, sim_time=self.sim_time
+            )
 
     def _phase_pre_step(self) -> None:
         if self.events.has_handlers(SimEvents.PRE_STEP):

@@ -104,6 +104,11 @@ class World:
         per-object events can skip building payloads while none has)."""
         return self._entity_buses
 
+    @property
+    def has_pending_bodies(self) -> bool:
+        """Whether spawned objects wait for their PyBullet bodies to be created."""
+        return False
+
     def on_event_bus_created(self) -> None:
         """An object of this simulation created its event bus (``obj.events``)."""
         self._entity_buses = True
