@@ -24,10 +24,11 @@ from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionMode, MotionMode, coerce_enum
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
-from fleet_async.core.bodies.spawning import create_bodies, create_body, wrap_all
+from fleet_async.core.bodies.spawning import construct, create_bodies, reserve_body, wrap_all
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.missions.agent_missions import AgentMissionApi
-from fleet_async.core.motion.controllers import Controller, build_controller_chain
+from fleet_async.core.motion.chain import build_controller_chain
+from fleet_async.core.motion.controllers import Controller
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.motion.joints import JointSet
 
@@ -109,7 +110,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         self._motion_mode = coerce_enum(MotionMode, motion_mode, "motion_mode")
         self.urdf_path = urdf_path
         self.use_fixed_base = bool(use_fixed_base)
-        self._ik_params = ik_params if ik_params is not None else IKParams()
+        self._ik_params = ik_params  # the defaults are made on first use (most agents: never)
         self._joint_tolerance = joint_tolerance
         self._joint_set: JointSet | None = None
         self.path_visualize = False
@@ -159,8 +160,11 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
                 notify_spawn=False,
             )
         else:
-            body = create_body(spawn_params, sim_core)
-            agent = _construct_or_remove_body(cls, sim_core, body, **_mesh_kwargs(spawn_params))
+            body, deferred = reserve_body(spawn_params, sim_core)
+            kwargs = _mesh_kwargs(spawn_params)
+            agent = construct(
+                lambda b: cls(b, sim_core=sim_core, **kwargs), body, deferred, sim_core
+            )
         return cls._finish_spawn(agent, spawn_params, sim_core)
 
     @classmethod
@@ -326,6 +330,10 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     def plugins(self) -> list[AgentPlugin]:
         """Per-agent plugins, in the order added."""
         return list(self._plugins)
+
+    def has_plugins(self) -> bool:
+        """Whether any per-agent plugin is attached."""
+        return bool(self._plugins)
 
     def add_plugin(self, plugin: AgentPlugin) -> None:
         """Attach a plugin built for this agent.

@@ -17,17 +17,13 @@ from fleet_async.core.base.events import EventBus
 from fleet_async.core.base.logging_utils import NamedLazyLogger
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.base.types import CollisionMode, coerce_enum
+from fleet_async.core.bodies.constructors import SimObjectConstructors
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.bodies.spawning import (
-    create_bodies,
-    create_body,
-    load_sdf_objects,
-    wrap_all,
-)
 from fleet_async.core.geometry.approach import find_nearest
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.vectors import as_orientation, as_position
-from fleet_async.core.world.shapes import ShapeParams, get_or_create_shapes
+from fleet_async.core.world.pending import PENDING_BODY
+from fleet_async.core.world.shapes import ShapeParams
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
@@ -36,7 +32,7 @@ if TYPE_CHECKING:
 __all__ = ["ShapeParams", "SimObject", "SimObjectSpawnParams"]
 
 
-class SimObject:
+class SimObject(SimObjectConstructors):
     """A body in the simulation: robot, pallet, shelf or marker.
 
     Args:
@@ -68,6 +64,7 @@ class SimObject:
     is_agent: ClassVar[bool] = False
     """Whether the simulation lists objects of this class in ``sim.agents``."""
     _store: KinematicState
+    _logger: NamedLazyLogger | None = None
 
     def __init__(
         self,
@@ -81,7 +78,7 @@ class SimObject:
         *,
         register: bool = True,
     ) -> None:
-        self.body_id = int(body_id)
+        self._body_id = int(body_id)
         self.object_id = -1
         self.name = name
         self.pickable = bool(pickable)
@@ -89,8 +86,7 @@ class SimObject:
         self.sim_core: MultiRobotSimulationCore | None = None
         self._collision_mode = coerce_enum(CollisionMode, collision_mode, "collision_mode")
         self._events: EventBus | None = None
-        self._callbacks = PeriodicSchedule()
-        self._log = NamedLazyLogger(__name__)
+        self._callbacks: PeriodicSchedule | None = None  # made on first registration
         self._row = -1  # no row until bound to a simulation or given a standalone store
         if sim_core is not None:
             self.mass = float(mass) if mass is not None else sim_core.body_mass(self.body_id)
@@ -105,13 +101,41 @@ class SimObject:
                 *self._standalone_pose(),
                 collision_code=COLLISION_CODES[self._collision_mode.value],
             )
-        self._refresh_log_prefix()
 
     def __repr__(self) -> str:
         return (
             f"{type(self).__name__}(object_id={self.object_id}, name={self.name!r}, "
-            f"body_id={self.body_id})"
+            f"body_id={self._body_id})"
         )
+
+    # ----- the PyBullet body --------------------------------------------------------------
+
+    @property
+    def body_id(self) -> int:
+        """PyBullet body unique id (-1 for none), ready for raw ``pybullet`` calls: a body
+        still pending is created first, and PyBullet's client-side body list is brought up to
+        date if bodies were created in batches since (so ``getBodyInfo`` works)."""
+        sim = self.sim_core
+        if sim is not None:
+            world = sim.world
+            if self._body_id == PENDING_BODY:
+                world.create_pending_bodies()
+            world.sync_body_list()
+        return self._body_id
+
+    @body_id.setter
+    def body_id(self, value: int) -> None:
+        self._body_id = int(value)
+
+    @property
+    def raw_body_id(self) -> int:
+        """The body id without creating a pending body: ``PENDING_BODY`` (-2) while the body
+        waits to be created with others (see ``world/pending.py``)."""
+        return self._body_id
+
+    def bind_body(self, body_id: int) -> None:
+        """Take the PyBullet body created for this object. Called by the world; not for users."""
+        self._body_id = int(body_id)
 
     # ----- binding to a simulation (called by MultiRobotSimulationCore) -------------------
 
@@ -123,7 +147,8 @@ class SimObject:
         self._store = store
         self._row = row
         self.object_id = object_id
-        self._refresh_log_prefix()
+        if self._logger is not None:
+            self._refresh_log_prefix()
 
     def on_removed(self) -> None:
         """Called by the simulation just before the object leaves it (subclass hook)."""
@@ -137,6 +162,10 @@ class SimObject:
         )
         self.sim_core = None
         self.object_id = -1
+        if self._body_id == PENDING_BODY:
+            self._body_id = -1  # left before its body was made: it never will be
+        if self._logger is not None:
+            self._refresh_log_prefix()
 
     @property
     def state_row(self) -> int:
@@ -148,7 +177,16 @@ class SimObject:
     def set_name(self, name: str | None) -> None:
         """Rename the object and refresh its log prefix."""
         self.name = name
-        self._refresh_log_prefix()
+        if self._logger is not None:
+            self._refresh_log_prefix()
+
+    @property
+    def _log(self) -> NamedLazyLogger:
+        """This object's logger (made on first use: most objects never log)."""
+        if self._logger is None:
+            self._logger = NamedLazyLogger(__name__)
+            self._refresh_log_prefix()
+        return self._logger
 
     @property
     def events(self) -> EventBus:
@@ -324,149 +362,36 @@ class SimObject:
         Raises:
             ValueError: if ``frequency`` is not a number > 0.
         """
+        if self._callbacks is None:
+            self._callbacks = PeriodicSchedule()
         self._callbacks.add(callback, frequency, owner=f"{self!r}.register_callback")
         if self.sim_core is not None:
             self.sim_core.world.on_object_callbacks_changed(self)
 
     def unregister_callback(self, callback: Callable[..., Any]) -> bool:
         """Remove a callback; return whether it was registered."""
-        return self._callbacks.remove(callback)
+        return self._callbacks is not None and self._callbacks.remove(callback)
 
     def has_callbacks(self) -> bool:
         """Whether any per-object callbacks are registered."""
-        return len(self._callbacks) > 0
+        return self._callbacks is not None and len(self._callbacks) > 0
 
     def execute_callbacks(self, current_time: float) -> None:
         """Run the callbacks due at ``current_time`` (sim seconds)."""
-        for callback, dt in self._callbacks.due(current_time):
-            callback(self, dt)
+        if self._callbacks is not None:
+            for callback, dt in self._callbacks.due(current_time):
+                callback(self, dt)
 
     def callback_steps_until_due(self, step: int, timestep: float, limit: int) -> int:
         """How many steps from ``step`` on (at most ``limit``) run before a callback is due."""
+        if self._callbacks is None:
+            return limit
         return self._callbacks.steps_until_due(step, timestep, limit)
 
     def reset_callbacks(self) -> None:
         """Restart the callback schedule from sim time 0."""
-        self._callbacks.reset()
-
-    # ----- constructors -------------------------------------------------------------------
-
-    @classmethod
-    def create_shared_shapes(
-        cls,
-        visual_shape: ShapeParams | None = None,
-        collision_shape: ShapeParams | None = None,
-        physics_client_id: int = 0,
-    ) -> tuple[int, int]:
-        """Return (visual_id, collision_id), reusing shapes with identical parameters."""
-        return get_or_create_shapes(visual_shape, collision_shape, physics_client_id)
-
-    @classmethod
-    def from_params(
-        cls, spawn_params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None = None
-    ) -> SimObject:
-        """Create the body described by ``spawn_params`` and wrap it.
-
-        Raises:
-            FileNotFoundError: for a mesh file that does not exist.
-            ValueError: for shapes PyBullet rejects.
-        """
-        body_id = create_body(spawn_params, sim_core)
-        return cls(
-            body_id,
-            sim_core=sim_core,
-            pickable=spawn_params.pickable,
-            mass=spawn_params.mass,
-            collision_mode=spawn_params.collision_mode,
-            name=spawn_params.name,
-            user_data=dict(spawn_params.user_data),
-        )
-
-    @classmethod
-    def spawn_batch(
-        cls, params_list: Sequence[SimObjectSpawnParams], sim_core: MultiRobotSimulationCore
-    ) -> list[SimObject]:
-        """Spawn many shape-based objects fast (bodies created in batches); input order kept.
-
-        If anything fails, nothing this call created is left behind.
-        """
-        params_list = list(params_list)
-        with sim_core.batch_spawn():
-            bodies = create_bodies(params_list, sim_core)
-            return wrap_all(
-                bodies,
-                lambda i, body: cls(
-                    body,
-                    sim_core=sim_core,
-                    pickable=params_list[i].pickable,
-                    mass=params_list[i].mass,
-                    collision_mode=params_list[i].collision_mode,
-                    name=params_list[i].name,
-                    user_data=dict(params_list[i].user_data),
-                ),
-                sim_core,
-            )
-
-    @classmethod
-    def from_mesh(
-        cls,
-        visual_shape: ShapeParams | None = None,
-        collision_shape: ShapeParams | None = None,
-        pose: Pose | None = None,
-        mass: float = 0.0,
-        pickable: bool = True,
-        sim_core: MultiRobotSimulationCore | None = None,
-        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        name: str | None = None,
-        user_data: dict[str, Any] | None = None,
-    ) -> SimObject:
-        """Create an object from visual and collision shapes (box, sphere, cylinder or mesh)."""
-        params = SimObjectSpawnParams(
-            visual_shape=visual_shape,
-            collision_shape=collision_shape,
-            initial_pose=pose if pose is not None else Pose([0.0, 0.0, 0.0]),
-            mass=mass,
-            pickable=pickable,
-            name=name,
-            collision_mode=collision_mode,  # type: ignore[arg-type]  # coerced in __post_init__
-            user_data=user_data or {},
-        )
-        return cls.from_params(params, sim_core)
-
-    @classmethod
-    def from_dict(
-        cls, config: dict[str, Any], sim_core: MultiRobotSimulationCore | None = None
-    ) -> SimObject:
-        """``from_params(_spawn_params_cls.from_dict(config))`` in one call."""
-        return cls.from_params(cls._spawn_params_cls.from_dict(config), sim_core)
-
-    @classmethod
-    def from_sdf(
-        cls,
-        sdf_path: str,
-        sim_core: MultiRobotSimulationCore | None = None,
-        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        global_scaling: float = 1.0,
-        name_prefix: str | None = None,
-        pickable: bool = False,
-        use_fixed_base: bool = True,
-    ) -> list[SimObject]:
-        """Load every body of an SDF file (``pybullet.loadSDF``) and wrap each one.
-
-        Raises:
-            FileNotFoundError: naming the paths tried when the file does not exist.
-            ValueError: if PyBullet cannot parse the file.
-        """
-        return load_sdf_objects(
-            cls,
-            sdf_path,
-            sim_core,
-            collision_mode,
-            global_scaling,
-            name_prefix,
-            pickable,
-            use_fixed_base,
-        )
+        if self._callbacks is not None:
+            self._callbacks.reset()
 
     # ----- helpers ------------------------------------------------------------------------
 
@@ -494,4 +419,5 @@ class SimObject:
 
     def _refresh_log_prefix(self) -> None:
         label = f"{self.object_id}:{self.name}" if self.name else str(self.object_id)
-        self._log.set_prefix(f"[{type(self).__name__}:{label}] ")
+        assert self._logger is not None
+        self._logger.set_prefix(f"[{type(self).__name__}:{label}] ")

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from fleet_async.core.collision.system import CollisionSystem
     from fleet_async.core.world.world import World
 
-__all__ = ["IdleSteps"]
+__all__ = ["IdleApi", "IdleSteps"]
 
 _PER_STEP_EVENTS = (
     SimEvents.PRE_STEP,
@@ -106,3 +106,79 @@ class IdleSteps:
         """Account for ``n`` empty steps from ``step`` (the caller advances the clock)."""
         self._collision.skip(step, n, self._dt)
         self._fleet.skip(step + n - 1)
+
+
+class IdleApi:
+    """The simulation's idle-step API (mixed into the kernel), for drivers of the step loop."""
+
+    # Provided by the simulation kernel.
+    _idle: IdleSteps
+    _paused: bool
+    _initialized: bool
+    _step_count: int
+    events: EventBus
+
+    if TYPE_CHECKING:
+
+        @property
+        def sim_time(self) -> float: ...
+
+    def idle_steps(self, limit: int) -> int:
+        """How many of the next steps (at most ``limit``) are provably empty.
+
+        A step is empty when running it would change nothing but the clock: no body moves or
+        is due to (no path or velocity command in the kinematic engine, no joint moving, no
+        agent that just stopped still to have its velocity zeroed), no high-level controller,
+        agent plugin or ``update(dt)`` override runs, no callback, plugin or per-object
+        callback is due, no action is due to start, be polled or time out, no collision check
+        has anything new to examine (nothing moved and no object joined or left since the last
+        check), nothing is subscribed to PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE (a
+        running recorder is such a subscriber), no body waits to be created, and neither the
+        GUI, ``physics=True``, step-timing logs nor a motion system other than the built-in
+        ones needs every step. Action and collision events, the monitor (fed once per frame by
+        ``run_simulation``) and the mission runtime's own timers do not count: the mission
+        driver combines this answer with its next timer itself.
+
+        The answer only depends on the simulation's state, so it stays true until something
+        changes it (a command, a pose write, a registration); skip the steps at once.
+
+        Args:
+            limit: The most steps to look ahead (>= 0).
+
+        Returns:
+            ``k`` in ``[0, limit]``: the steps ``step_count .. step_count + k - 1`` are empty;
+            ``sim.skip_steps(k)`` then gives exactly the state ``k`` calls of ``step_once()``
+            would. 0 while paused or before the first step.
+        """
+        if self._paused or not self._initialized:
+            return 0
+        return self._idle.count(self._step_count, int(limit))
+
+    def skip_steps(self, n: int) -> None:
+        """Advance the clock over ``n`` empty steps as if ``step_once()`` had run ``n`` times.
+
+        ``step_count`` grows by ``n`` and ``sim_time`` stays ``step_count * timestep``;
+        callbacks, plugins, per-object callbacks, action timers and collision checks keep
+        their exact schedules (none of them was due in the span, or a collision check that
+        was due would have found nothing new). Emits ``STEPS_SKIPPED`` (``sim``, ``step``: the
+        first skipped step, ``count``: ``n``, ``sim_time``: after the span) for recorders of
+        the span; no per-step event is emitted.
+
+        Raises:
+            ValueError: if ``n`` is negative or more than ``idle_steps(n)`` (one of the steps
+                is not provably empty).
+        """
+        if n < 0 or self.idle_steps(n) < n:
+            raise ValueError(
+                f"skip_steps: {n} steps are not provably empty from step {self._step_count} "
+                f"(idle_steps says {max(self.idle_steps(max(n, 0)), 0)}); run step_once()"
+            )
+        if n == 0:
+            return
+        first = self._step_count
+        self._idle.skip(first, n)
+        self._step_count += n
+        if self.events.has_handlers(SimEvents.STEPS_SKIPPED):
+            self.events.emit(
+                SimEvents.STEPS_SKIPPED, sim=self, step=first, count=n, sim_time=self.sim_time
+            )

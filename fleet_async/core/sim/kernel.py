@@ -35,7 +35,7 @@ from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
 from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
-from fleet_async.core.sim.idle import IdleSteps
+from fleet_async.core.sim.idle import IdleApi, IdleSteps
 from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
@@ -57,7 +57,7 @@ _LOG_LEVELS = {"debug": 10, "info": 20, "warn": 30, "warning": 30, "error": 40, 
 _Sim = TypeVar("_Sim", bound="SimulationKernel")
 
 
-class SimulationKernel(RegistryApi, SimMissionApi, CollisionApi):
+class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
     """The clock, the step loop and what it moves (objects, agents, plugins, managers).
 
     Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
@@ -134,7 +134,12 @@ class SimulationKernel(RegistryApi, SimMissionApi, CollisionApi):
 
     @property
     def client(self) -> int:
-        """PyBullet physics client id, for raw ``pybullet`` calls (``physicsClientId=``)."""
+        """PyBullet physics client id, for raw ``pybullet`` calls (``physicsClientId=``).
+
+        Bodies of objects spawned since the last step are created first, so raw calls see
+        every object."""
+        if self._world.has_pending_bodies:
+            self._world.create_pending_bodies()
         return self._backend.client
 
     @property
@@ -285,6 +290,8 @@ class SimulationKernel(RegistryApi, SimMissionApi, CollisionApi):
             return None
         if not self._initialized:
             self.initialize_simulation()
+        if self._world.has_pending_bodies:
+            self._world.create_pending_bodies()
         self._world.in_step = True
         try:
             if return_profiling or self._profiler.log_summary:
@@ -297,66 +304,6 @@ class SimulationKernel(RegistryApi, SimMissionApi, CollisionApi):
         finally:
             self._world.in_step = False
         return timings if return_profiling else None
-
-    def idle_steps(self, limit: int) -> int:
-        """How many of the next steps (at most ``limit``) are provably empty.
-
-        A step is empty when running it would change nothing but the clock: no body moves or
-        is due to (no path or velocity command in the kinematic engine, no joint moving, no
-        agent that just stopped still to have its velocity zeroed), no high-level controller,
-        agent plugin or ``update(dt)`` override runs, no callback, plugin or per-object
-        callback is due, no action is due to start, be polled or time out, no collision check
-        has anything new to examine (nothing moved and no object joined or left since the last
-        check), nothing is subscribed to PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE (a
-        running recorder is such a subscriber), no body waits to be created, and neither the
-        GUI, ``physics=True``, step-timing logs nor a motion system other than the built-in
-        ones needs every step. Action and collision events, the monitor (fed once per frame by
-        ``run_simulation``) and the mission runtime's own timers do not count: the mission
-        driver combines this answer with its next timer itself.
-
-        The answer only depends on the simulation's state, so it stays true until something
-        changes it (a command, a pose write, a registration); skip the steps at once.
-
-        Args:
-            limit: The most steps to look ahead (>= 0).
-
-        Returns:
-            ``k`` in ``[0, limit]``: the steps ``step_count .. step_count + k - 1`` are empty;
-            ``sim.skip_steps(k)`` then gives exactly the state ``k`` calls of ``step_once()``
-            would. 0 while paused or before the first step.
-        """
-        if self._paused or not self._initialized:
-            return 0
-        return self._idle.count(self._step_count, int(limit))
-
-    def skip_steps(self, n: int) -> None:
-        """Advance the clock over ``n`` empty steps as if ``step_once()`` had run ``n`` times.
-
-        ``step_count`` grows by ``n`` and ``sim_time`` stays ``step_count * timestep``;
-        callbacks, plugins, per-object callbacks, action timers and collision checks keep
-        their exact schedules (none of them was due in the span, or a collision check that
-        was due would have found nothing new). Emits ``STEPS_SKIPPED`` (``sim``, ``step``: the
-        first skipped step, ``count``: ``n``, ``sim_time``: after the span) for recorders of
-        the span; no per-step event is emitted.
-
-        Raises:
-            ValueError: if ``n`` is negative or more than ``idle_steps(n)`` (one of the steps
-                is not provably empty).
-        """
-        if n < 0 or self.idle_steps(n) < n:
-            raise ValueError(
-                f"skip_steps: {n} steps are not provably empty from step {self._step_count} "
-                f"(idle_steps says {max(self.idle_steps(max(n, 0)), 0)}); run step_once()"
-            )
-        if n == 0:
-            return
-        first = self._step_count
-        self._idle.skip(first, n)
-        self._step_count += n
-        if self.events.has_handlers(SimEvents.STEPS_SKIPPED):
-            self.events.emit(
-                SimEvents.STEPS_SKIPPED, sim=self, step=first, count=n, sim_time=self.sim_time
-            )
 
     def _phase_pre_step(self) -> None:
         if self.events.has_handlers(SimEvents.PRE_STEP):
@@ -419,7 +366,9 @@ class SimulationKernel(RegistryApi, SimMissionApi, CollisionApi):
         return self._memory.usage()
 
     def sync_pybullet(self) -> int:
-        """Push every pose PyBullet has not seen yet (before raw ``pybullet`` queries)."""
+        """Create pending bodies and push every pose PyBullet has not seen yet (before raw
+        ``pybullet`` queries); return how many poses were pushed."""
+        self._world.create_pending_bodies()
         return self._backend.sync(self._world.store)
 
     # ----- running ------------------------------------------------------------------------

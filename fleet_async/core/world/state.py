@@ -88,20 +88,28 @@ class KinematicState:
         """Claim a row for one object and fill it; return the row index."""
         if self._free:
             row = heapq.heappop(self._free)
+            # A reused row keeps what its last object left: reset everything.
+            self.velocity[row] = 0.0
+            self.angular_velocity[row] = 0.0
+            self.collision_mode[row] = collision_code
+            self.kinematic[row] = kinematic
+            self.dirty[row] = False
         else:
             row = self._high_water
-            self._reserve(row + 1)
+            if row >= len(self.active):
+                self._reserve(row + 1)
             self._high_water += 1
+            # A fresh row holds the defaults _reserve filled in (zero velocities, mode 0,
+            # kinematic, clean): one spawn of thousands costs only the writes below.
+            if collision_code:
+                self.collision_mode[row] = collision_code
+            if not kinematic:
+                self.kinematic[row] = False
         self.position[row] = position
         self.orientation[row] = orientation
-        self.velocity[row] = 0.0
-        self.angular_velocity[row] = 0.0
         self.body_id[row] = body_id
         self.object_id[row] = object_id
-        self.collision_mode[row] = collision_code
-        self.kinematic[row] = kinematic
         self.active[row] = True
-        self.dirty[row] = False
         self.moved[row] = True
         self.layout_version += 1
         return row
@@ -152,7 +160,13 @@ class KinematicState:
         self.layout_version += 1
 
     def clear(self) -> None:
-        """Free every row (used by ``reset``); capacity is kept."""
+        """Free every row (used by ``reset``); capacity is kept, and rows hold the defaults of
+        fresh ones again (``allocate`` relies on it)."""
+        used = slice(0, self._high_water)
+        self.velocity[used] = 0.0
+        self.angular_velocity[used] = 0.0
+        self.collision_mode[used] = 0
+        self.kinematic[used] = True
         self.active[:] = False
         self.dirty[:] = False
         self.moved[:] = False
@@ -206,6 +220,6 @@ class KinematicState:
         self.orientation[old_cap:, 3] = 1.0
         for name in ("kinematic", "active", "dirty", "moved"):
             old = getattr(self, name)
-            grown = np.zeros(new_cap, dtype=bool)
+            grown = np.full(new_cap, name == "kinematic", dtype=bool)  # fresh rows: kinematic
             grown[: old.shape[0]] = old
             setattr(self, name, grown)

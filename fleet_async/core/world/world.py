@@ -20,6 +20,7 @@ from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.world.attachments import Attachment, AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.links import resolve_link_index
+from fleet_async.core.world.pending import PENDING_BODY, PendingBodies, PendingBody
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
@@ -66,7 +67,18 @@ class World:
         self._saved_mass: dict[int, float] = {}
         self._next_id = 0
         self._entity_buses = False
+        self._pending = PendingBodies()
+        self._body_list_stale = False
+        self._expected: (
+            tuple[PendingBody, Sequence[float] | np.ndarray, Sequence[float] | np.ndarray] | None
+        ) = None
         self.in_step = False
+
+    @property
+    def client(self) -> int:
+        """The PyBullet client id, without creating pending bodies first (for spawning code
+        that makes shapes and bodies; raw PyBullet calls use ``sim.client``)."""
+        return self._backend.client
 
     @property
     def store(self) -> KinematicState:
@@ -107,7 +119,29 @@ class World:
     @property
     def has_pending_bodies(self) -> bool:
         """Whether spawned objects wait for their PyBullet bodies to be created."""
-        return False
+        return len(self._pending) > 0
+
+    def create_pending_bodies(self) -> None:
+        """Create the PyBullet bodies of every object spawned with a pending body."""
+        if len(self._pending) and self._pending.create_all(self._store, self._backend.client):
+            self._body_list_stale = True
+
+    def sync_body_list(self) -> None:
+        """Make PyBullet's client-side body list (``getBodyInfo``, ``getNumBodies``) know every
+        body created in batches (``pybullet.syncBodyInfo``; about 80 us per body in the
+        world, so only raw access through ``obj.body_id`` asks for it)."""
+        if self._body_list_stale:
+            p.syncBodyInfo(physicsClientId=self._backend.client)
+            self._body_list_stale = False
+
+    def expect_pending(
+        self,
+        deferred: tuple[PendingBody, Sequence[float] | np.ndarray, Sequence[float] | np.ndarray]
+        | None,
+    ) -> None:
+        """The next object added with body id ``PENDING_BODY`` joins at this (body, position,
+        orientation) and its body is created later, with others; None withdraws it."""
+        self._expected = deferred
 
     def on_event_bus_created(self) -> None:
         """An object of this simulation created its event bus (``obj.events``)."""
@@ -138,6 +172,8 @@ class World:
         for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
             registry.clear()
         self._attachments.clear()
+        self._pending.clear()
+        self._body_list_stale = False
         self._saved_mass.clear()
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._store.clear()
@@ -152,10 +188,16 @@ class World:
         if obj.sim_core is not None or obj.object_id >= 0:
             owner = "this" if obj.sim_core is self._sim else "another"
             raise ValueError(f"add_object: {obj!r} already belongs to {owner} simulation")
-        body = obj.body_id
+        body = obj.raw_body_id
         pos: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
         orn: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0, 1.0)
-        if body >= 0:
+        pending = None
+        if body == PENDING_BODY:
+            if self._expected is None:
+                raise ValueError(f"add_object: {obj!r} has a pending body nobody described")
+            pending, pos, orn = self._expected
+            self._expected = None
+        elif body >= 0:
             pos, orn = self._backend.read_pose(body)
         elif obj.state_row >= 0:
             pose = obj.get_pose()
@@ -183,6 +225,8 @@ class World:
             self._entity_buses = True
         if dynamic:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
+        if pending is not None:
+            self._pending.add(pending, row, obj)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
             p.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self._backend.client)
         if notify:
@@ -212,7 +256,10 @@ class World:
         for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
             registry.pop(object_id, None)
         self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
-        self._backend.remove_body(obj.body_id)
+        if obj.raw_body_id == PENDING_BODY:
+            self._pending.discard(row)
+        else:
+            self._backend.remove_body(obj.raw_body_id)
         try:
             # Handlers still see the object's id and last pose.
             self._events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
