@@ -267,8 +267,15 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         client = 0 if sim_core is None else sim_core.client
         pos, orn = pose.as_position_orientation()
         try:
+            # Cached graphics shapes: loading one model many times re-uses its visual
+            # shapes instead of parsing them again (half the cost of each load).
             body = p.loadURDF(
-                path, pos, orn, useFixedBase=bool(use_fixed_base), physicsClientId=client
+                path,
+                pos,
+                orn,
+                useFixedBase=bool(use_fixed_base),
+                flags=p.URDF_ENABLE_CACHED_GRAPHICS_SHAPES,
+                physicsClientId=client,
             )
         except p.error as exc:
             raise ValueError(f"urdf_path {path!r}: PyBullet could not load it ({exc})") from exc
