@@ -7,6 +7,7 @@ import pybullet as p
 import pytest
 
 from fleet_async import (
+    Agent,
     CollisionMode,
     MultiRobotSimulationCore,
     Pose,
@@ -353,3 +354,80 @@ def test_one_cell_objects_and_a_quiet_check():
         assert pairs == [(objs[i].object_id, objs[i + 1].object_id) for i in range(5)]
         sim.step_once()
         assert sim.get_active_collision_pairs() == pairs and len(started) == 5
+
+
+def _head_on(sweep, gap, lane=0.0, shape=None):
+    """Two 0.1 m robots driving at each other at 2 m/s (dt 0.1 s); the collision events."""
+    body = shape or ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
+    with make_sim(collision_sweep=sweep) as sim:
+        ctrl = {"type": "omni", "max_linear_vel": 2.0}
+        a = Agent.from_mesh(body, body, Pose.from_xyz(-gap, 0, 0.1), sim_core=sim, controller=ctrl)
+        b = Agent.from_mesh(
+            body, body, Pose.from_xyz(gap, lane, 0.1), sim_core=sim, controller=ctrl
+        )
+        a.set_goal_pose(Pose.from_xyz(gap + 3, 0, 0.1))
+        b.set_goal_pose(Pose.from_xyz(-gap - 3, lane, 0.1))
+        log = []
+        for event in (SimEvents.COLLISION_STARTED, SimEvents.COLLISION_ENDED):
+            sim.events.on(event, lambda e=event, **_: log.append((e, sim.step_count)))
+        for _ in range(40):
+            sim.step_once()
+        return log
+
+
+@pytest.mark.parametrize("gap", [1.0, 1.2])
+def test_swept_check_reports_robots_that_pass_through_each_other_in_one_step(gap):
+    # At 0.4 m per step of closing speed, neither end pose of the crossing step overlaps.
+    assert _head_on(False, gap) == []
+    started, ended = _head_on(True, gap)
+    assert started[0] == SimEvents.COLLISION_STARTED and ended[0] == SimEvents.COLLISION_ENDED
+    assert ended[1] == started[1] + 1  # reported by the crossing step, ended by the next one
+
+
+def test_swept_check_keeps_near_misses_and_touches_apart():
+    # Parallel lanes: faces pass 0.1 m apart (no contact), then 0.015 m apart (within the
+    # 0.02 m margin: a contact whether or not the check is swept).
+    assert _head_on(True, 1.0, lane=0.2) == []
+    assert [e for e, _ in _head_on(True, 1.0, lane=0.115)] == [
+        SimEvents.COLLISION_STARTED,
+        SimEvents.COLLISION_ENDED,
+    ]
+    # A cube sweeping past another's edge with gaps of g on two axes comes within g * sqrt(2):
+    # 0.014 m gaps (0.0198 m) are within the 0.02 m margin, 0.016 m gaps (0.0226 m) are not,
+    # though each gap alone is (the swept test measures the distance, not the axes).
+    for gap, expected in ((0.016, 0), (0.014, 1)):
+        with make_sim(collision_sweep=True) as sim:
+            cube(sim, 0.0)
+            b = cube(sim, -5.0, y=0.2 + gap, z=0.7 + gap)
+            sim.step_once()
+            b.set_pose(Pose.from_xyz(5.0, 0.2 + gap, 0.7 + gap))
+            sim.step_once()
+            assert sim.collision_count == expected
+
+
+def test_swept_check_of_other_shapes_uses_the_closest_approach():
+    ball = ShapeParams("sphere", radius=0.05)
+    assert _head_on(False, 1.0, shape=ball) == []
+    assert [e for e, _ in _head_on(True, 1.0, shape=ball)] == [
+        SimEvents.COLLISION_STARTED,
+        SimEvents.COLLISION_ENDED,
+    ]
+
+
+def test_swept_box_distance_decision_matches_a_fine_scan():
+    from fleet_async.core.collision.narrowphase import _within
+
+    rng = np.random.default_rng(11)
+    n = 120
+    rel0, move = rng.uniform(-1, 1, (n, 3)), rng.uniform(-2, 2, (n, 3))
+    half = rng.uniform(0.05, 0.3, (n, 3))
+    t = np.linspace(0.0, 1.0, 10001)[:, None]
+    least = np.array(
+        [
+            np.sqrt((np.maximum(np.abs(rel0[i] + t * move[i]) - half[i], 0) ** 2).sum(1)).min()
+            for i in range(n)
+        ]
+    )
+    for margin in (0.02, 0.1, 0.3):
+        clear = np.abs(least - margin) > 3e-4  # rows the scan itself resolves
+        assert (_within(rel0, move, half, margin) == (least <= margin))[clear].all()

@@ -144,31 +144,21 @@ def _entries(
         keys, s, owner = lo[idx] @ _WEIGHTS, span[idx], idx
     if not np.count_nonzero(s):
         return keys, owner
-    if owner is None:
-        owner = np.arange(len(keys))
-    if s.max() <= 1:
-        # One or two cells per axis (objects no larger than a cell): add the second cell
-        # along x, then y, then z, to the entries made so far.
-        which = None
-        for axis in range(3):
-            if not np.count_nonzero(s[:, axis]):
-                continue
-            extra = np.flatnonzero(s[:, axis] if which is None else s[which, axis])
-            keys = np.concatenate((keys, keys[extra] + _WEIGHTS[axis]))
-            which = (
-                np.concatenate((np.arange(len(s)), extra))
-                if which is None
-                else np.concatenate((which, which[extra]))
-            )
-        return keys, owner if which is None else owner[which]
-    s = s + 1
-    counts = s[:, 0] * s[:, 1] * s[:, 2]
-    # Enumerate each object's cells: local offset k in [0, count) -> (dx, dy, dz).
-    starts = np.repeat(np.cumsum(counts) - counts, counts)
-    k = np.arange(int(counts.sum())) - starts
-    sx, sy = np.repeat(s[:, 0], counts), np.repeat(s[:, 1], counts)
-    local = np.stack([k % sx, (k // sx) % sy, k // (sx * sy)], axis=1)
-    return np.repeat(keys, counts) + local @ _WEIGHTS, np.repeat(owner, counts)
+    # Add the further cells axis by axis: along x, every entry so far (offset 0 on x) gets
+    # one more entry per extra cell its object spans on x; then y over all of those; then z.
+    which = np.arange(len(keys))
+    for axis in range(3):
+        col = s[which, axis]
+        top = int(col.max())
+        if not top:
+            continue
+        parts_k, parts_w = [keys], [which]
+        for k in range(1, top + 1):
+            extra = np.flatnonzero(col >= k)
+            parts_k.append(keys[extra] + k * _WEIGHTS[axis])
+            parts_w.append(which[extra])
+        keys, which = np.concatenate(parts_k), np.concatenate(parts_w)
+    return keys, (which if owner is None else owner[which])
 
 
 def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.ndarray) -> np.ndarray:

@@ -5,10 +5,12 @@ get their exact distance in one numpy pass. Other distance queries on two bodies
 one known collision shape go to PyBullet as (shape, pose from the state store), so those rows
 are never pushed just for the query; the rest push their rows and ask about the bodies.
 
-The swept test (``SimulationParams.collision_sweep``) asks whether two objects touched at any
-time between the previous check and this one, each moving on the straight line between its two
-poses: exact for unrotated boxes (per-axis intervals of overlap in time, intersected), and for
-other shapes the pair is measured at the time its AABB centres came closest.
+The swept test (``SimulationParams.collision_sweep``) asks whether two objects came within the
+margin at any time between the previous check and this one, each moving on the straight line
+between its two positions (orientations as at this check): exact for unrotated boxes (per-axis
+intervals of overlap in time, intersected; a pair that never overlaps but comes within the
+margin on every axis has its true distance minimised over time), and for other shapes the pair
+is measured at the time its AABB centres came closest.
 """
 
 from __future__ import annotations
@@ -203,7 +205,7 @@ class NarrowPhase:
             hit = _overlap_in_time(rel, mv, half)  # the boxes overlapped: exact
             near = ~hit & _overlap_in_time(rel, mv, half + self.margin)
             if near.any():  # within the margin per axis: measure the Euclidean distance
-                hit[near] = _min_box_distance(rel[near], mv[near], half[near]) <= self.margin
+                hit[near] = _within(rel[near], mv[near], half[near], self.margin)
             out[boxes] = hit
         rest = ~boxes
         if rest.any():
@@ -238,11 +240,15 @@ def _overlap_in_time(rel0: np.ndarray, move: np.ndarray, reach: np.ndarray) -> n
     return first <= last
 
 
-def _min_box_distance(rel0: np.ndarray, move: np.ndarray, half: np.ndarray) -> np.ndarray:
-    """Least distance over t in [0, 1] between boxes whose centres are ``rel0 + t move`` apart.
+def _within(rel0: np.ndarray, move: np.ndarray, half: np.ndarray, margin: float) -> np.ndarray:
+    """Whether boxes whose centres are ``rel0 + t move`` apart come within ``margin`` for
+    some t in [0, 1] (per row).
 
     The distance is convex in t (a norm of convex functions of t), so a golden-section search
-    finds its minimum; 40 rounds narrow t to 1e-8.
+    closes in on its minimum; it changes by at most ``|move|`` per unit of t, so a row is
+    decided as soon as a point within the margin is found or the bracket's best point minus
+    ``|move|`` times its width is beyond it. Rows not decided after 40 rounds (t to 1e-8)
+    take the best point found.
     """
 
     def dist(t: np.ndarray) -> np.ndarray:
@@ -250,11 +256,22 @@ def _min_box_distance(rel0: np.ndarray, move: np.ndarray, half: np.ndarray) -> n
         return np.sqrt((gap * gap).sum(axis=1))
 
     ratio = (np.sqrt(5.0) - 1.0) / 2.0
-    lo, hi = np.zeros(len(rel0)), np.ones(len(rel0))
+    k = len(rel0)
+    speed = np.sqrt((move * move).sum(axis=1))
+    lo, hi = np.zeros(k), np.ones(k)
+    c, d = hi - ratio, lo + ratio
+    fc, fd = dist(c), dist(d)
+    best = np.minimum(np.minimum(fc, fd), np.minimum(dist(lo), dist(hi)))
     for _ in range(40):
-        m1 = hi - ratio * (hi - lo)
-        m2 = lo + ratio * (hi - lo)
-        left = dist(m1) <= dist(m2)
-        hi = np.where(left, m2, hi)
-        lo = np.where(left, lo, m1)
-    return np.minimum(dist(lo), np.minimum(dist(np.zeros(len(lo))), dist(np.ones(len(lo)))))
+        if ((best <= margin) | (best - speed * (hi - lo) > margin)).all():
+            break
+        left = fc <= fd  # the minimum lies in [lo, d]: d becomes the new hi
+        hi = np.where(left, d, hi)
+        lo = np.where(left, lo, c)
+        kept, fkept = np.where(left, c, d), np.where(left, fc, fd)
+        new = np.where(left, hi - ratio * (hi - lo), lo + ratio * (hi - lo))
+        fnew = dist(new)
+        best = np.minimum(best, fnew)
+        c, fc = np.where(left, new, kept), np.where(left, fnew, fkept)
+        d, fd = np.where(left, kept, new), np.where(left, fkept, fnew)
+    return best <= margin

@@ -39,6 +39,7 @@ _DISABLED = COLLISION_CODES["disabled"]
 _FLAT = COLLISION_CODES["normal_2d"]
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)
 _NO_ROWS = np.empty(0, dtype=np.int64)
+_SWEPT_CELLS = 7.0  # cells an object may span per axis, swept, and still be hashed
 
 
 class CollisionSystem:
@@ -258,12 +259,17 @@ class CollisionSystem:
             amin, amax = geo.aabb_min[rows], geo.aabb_max[rows]
             if moved is None:
                 moved = store.moved[rows]
+        threshold = self.multi_cell_threshold
         if sweep:
             shift = self._start[rows] - store.position[rows]
             amin = amin + np.minimum(shift, 0.0)
             amax = amax + np.maximum(shift, 0.0)
+            # A swept box spans a few more cells than the box: hash it over them rather
+            # than test it against every object; only a jump of many cells (a teleport) is
+            # tested that way.
+            threshold = max(threshold, _SWEPT_CELLS)
         cell = self.resolve_cell_size(rows)
-        idx = candidate_pairs(amin, amax, self._flat, moved, cell, self.multi_cell_threshold)
+        idx = candidate_pairs(amin, amax, self._flat, moved, cell, threshold)
         if len(idx) and self._static is not None:
             skip_static = self.ignore_static if ignore_static is None else ignore_static
             static_a, static_b = self._static[idx[:, 0]], self._static[idx[:, 1]]
