@@ -146,18 +146,21 @@ def _entries(
         return keys, owner
     # Add the further cells axis by axis: along x, every entry so far (offset 0 on x) gets
     # one more entry per extra cell its object spans on x; then y over all of those; then z.
-    which = np.arange(len(keys))
+    which = None
     for axis in range(3):
+        if not np.count_nonzero(s[:, axis]):
+            continue  # no object spans two cells along this axis
+        if which is None:
+            which = np.arange(len(keys))
         col = s[which, axis]
         top = int(col.max())
-        if not top:
-            continue
         parts_k, parts_w = [keys], [which]
         for k in range(1, top + 1):
             extra = np.flatnonzero(col >= k)
             parts_k.append(keys[extra] + k * _WEIGHTS[axis])
             parts_w.append(which[extra])
         keys, which = np.concatenate(parts_k), np.concatenate(parts_w)
+    assert which is not None
     return keys, (which if owner is None else owner[which])
 
 

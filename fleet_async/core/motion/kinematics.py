@@ -395,14 +395,16 @@ class KinematicEngine:
                 self._store.angular_velocity[rows] = 0.0
                 self.carry[idle] = 0.0
         mode = self.mode[: self._high]
-        if not np.count_nonzero(mode):  # every slot idle: nothing to integrate
+        active = np.count_nonzero(mode)
+        if not active:  # every slot idle: nothing to integrate
             return
         pose_slots = np.flatnonzero(mode == _POSE)
         if len(pose_slots):
             self._advance_pose(pose_slots, dt)
-        vel_slots = np.flatnonzero(mode == _VELOCITY)
-        if len(vel_slots):
-            self._advance_velocity(vel_slots, dt)
+        if len(pose_slots) < active:  # some slots follow velocity commands
+            vel_slots = np.flatnonzero(mode == _VELOCITY)
+            if len(vel_slots):
+                self._advance_velocity(vel_slots, dt)
 
     def _advance_pose(self, s: np.ndarray, dt: float) -> None:
         store = self._store
