@@ -2,9 +2,11 @@
 
 Each size runs in a fresh process (``seed_api_workloads.py spawn``): N agents spawned one call
 at a time with ``sim_core=sim``, timed up to the end of the first ``step_once()`` so that work
-an implementation defers (fleet_async creates the PyBullet bodies of such a loop in batches)
-is counted. With ``--incumbent VENV`` the same script runs on pybullet-fleet in that venv,
-interleaved with fleet_async run by run, and the report shows both and the ratio.
+an implementation defers to the step is counted. fleet_async creates the PyBullet bodies of
+such a loop only when something needs them (raw PyBullet access, a recording, physics...),
+all in batches; ``+bodies`` is that creation, forced by reading ``sim.client`` afterwards.
+With ``--incumbent VENV`` the same script runs on pybullet-fleet in that venv, interleaved with
+fleet_async run by run, and the report shows both and the ratio.
 
 Run:  python benchmarks/spawn_bench.py [--n 1000 10000 100000] [--kind mesh|urdf]
           [--repeat 3] [--incumbent /tmp/pbf] [--json]
@@ -54,12 +56,20 @@ def main(argv: list[str] | None = None) -> int:
     incumbent = None if args.incumbent is None else str(Path(args.incumbent) / "bin" / "python")
     for n in args.n:
         ours: list[float] = []
+        bodies: list[float] = []
         theirs: list[float] = []
         for _ in range(args.repeat):  # interleaved, so both sides see the same machine
-            ours.append(run_one(sys.executable, "fleet_async", n, args.kind, model)["spawn_s"])
+            mine = run_one(sys.executable, "fleet_async", n, args.kind, model)
+            ours.append(mine["spawn_s"])
+            bodies.append(mine["bodies_s"])
             if incumbent is not None:
                 theirs.append(run_one(incumbent, "pybullet_fleet", n, args.kind, model)["spawn_s"])
-        row: dict[str, Any] = {"n": n, "kind": args.kind, "fleet_async_s": ours}
+        row: dict[str, Any] = {
+            "n": n,
+            "kind": args.kind,
+            "fleet_async_s": ours,
+            "fleet_async_bodies_s": bodies,
+        }
         if theirs:
             row["incumbent_s"] = theirs
             row["speedup_median"] = statistics.median(theirs) / statistics.median(ours)
@@ -67,7 +77,8 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(row), flush=True)
             continue
         text = f"N={n:>7} {args.kind}: fleet_async {statistics.median(ours):7.3f} s"
-        text += f" (runs {', '.join(f'{t:.3f}' for t in ours)})"
+        text += f" (runs {', '.join(f'{t:.3f}' for t in ours)};"
+        text += f" +bodies {statistics.median(bodies):.3f} s)"
         if theirs:
             text += f"  incumbent {statistics.median(theirs):7.3f} s"
             text += f" (runs {', '.join(f'{t:.3f}' for t in theirs)})"

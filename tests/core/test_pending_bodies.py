@@ -24,15 +24,19 @@ def spawn(sim, x, **kw):
     return Agent.from_mesh(CUBE, CUBE, Pose.from_xyz(x, 0.0, 0.1), sim_core=sim, **kw)
 
 
-def test_a_loop_of_from_mesh_leaves_bodies_pending_until_a_step(sim):
+def test_a_loop_of_from_mesh_leaves_bodies_pending_until_something_needs_them(sim):
     agents = [spawn(sim, float(i)) for i in range(5)]
     assert sim.world.has_pending_bodies
     assert [a.raw_body_id for a in agents] == [PENDING_BODY] * 5
     assert agents[2].get_pose().x == 2.0  # the row exists at once
-    sim.step_once()
-    assert not sim.world.has_pending_bodies
-    bodies = [a.raw_body_id for a in agents]
-    assert min(bodies) >= 0 and len(set(bodies)) == 5
+    agents[3].set_goal_pose(Pose.from_xyz(3.0, 2.0, 0.1))
+    for _ in range(30):
+        sim.step_once()  # motion and collision checks need no PyBullet body
+    assert agents[3].get_pose().y == pytest.approx(2.0)
+    # Only the first body of the shape was made, to measure the shape.
+    assert [a.raw_body_id == PENDING_BODY for a in agents] == [False] + [True] * 4
+    bodies = [a.body_id for a in agents]  # reading one creates them all
+    assert min(bodies) >= 0 and len(set(bodies)) == 5 and not sim.world.has_pending_bodies
     for a in agents:
         pos, _ = p.getBasePositionAndOrientation(a.body_id, physicsClientId=sim.client)
         assert pos == pytest.approx(a.get_pose().position)
@@ -88,8 +92,19 @@ def test_collisions_of_pending_bodies_are_found_in_the_first_step(sim):
     assert sim.get_active_collision_pairs() == [(a.object_id, b.object_id)]
 
 
-def test_bodies_are_made_at_once_with_dynamics_or_a_gui():
+def test_bodies_are_made_at_once_with_dynamics_and_before_a_physics_step():
     with MultiRobotSimulationCore(headless_params(physics=True)) as sim:
         heavy = SimObject.from_mesh(CUBE, CUBE, Pose.from_xyz(0, 0, 1), mass=1.0, sim_core=sim)
         light = SimObject.from_mesh(CUBE, CUBE, Pose.from_xyz(1, 0, 1), mass=0.0, sim_core=sim)
         assert heavy.raw_body_id >= 0 and light.raw_body_id == PENDING_BODY
+        sim.step_once()
+        assert light.raw_body_id >= 0
+
+
+def test_queries_that_need_bodies_create_them():
+    with MultiRobotSimulationCore(
+        headless_params(collision_detection_method="contact_points")
+    ) as sim:
+        a, b = spawn(sim, 0.0), spawn(sim, 0.19)
+        sim.step_once()
+        assert b.raw_body_id >= 0 and a.raw_body_id >= 0

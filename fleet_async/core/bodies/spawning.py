@@ -19,12 +19,11 @@ from collections.abc import Callable, Sequence
 from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, TypeVar
 
-import numpy as np
 import pybullet as p
 
 from fleet_async.core.base.paths import resolve_data_file
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.world.pending import PENDING_BODY, PendingBody
+from fleet_async.core.world.pending import PENDING_BODY, Deferred, PendingBody
 from fleet_async.core.world.shapes import get_or_create_shapes, record_body_shape
 
 if TYPE_CHECKING:
@@ -42,8 +41,6 @@ __all__ = [
     "wrap_all",
 ]
 
-Deferred = tuple[PendingBody, "Sequence[float] | np.ndarray", "Sequence[float] | np.ndarray"]
-"""A pending body and the pose its object joins at."""
 
 T = TypeVar("T", bound="SimObject")
 

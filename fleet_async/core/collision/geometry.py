@@ -18,13 +18,18 @@ PyBullet reports them.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pybullet as p
 
 from fleet_async.core.geometry.quaternions import rotate_vectors_batch
+from fleet_async.core.world.pending import PENDING_BODY
 from fleet_async.core.world.shapes import body_collision_shape
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
+
+if TYPE_CHECKING:
+    from fleet_async.core.world.world import World
 
 __all__ = ["CollisionGeometry"]
 
@@ -56,8 +61,9 @@ class CollisionGeometry:
 
     Args:
         pad: Metres added to every side of the world AABBs (half the closest-points margin).
-        client: Returns the PyBullet client id (pending bodies are created by asking).
+        client: Returns the PyBullet client id (without creating pending bodies).
         sync_rows: Pushes the given rows' poses to PyBullet (before reading bodies there).
+        world: Pending bodies: their shapes, and creating one to measure its shape.
 
     Attributes (row-indexed, grown with the store):
         owner: Object id the row was registered for (-1: none).
@@ -72,11 +78,16 @@ class CollisionGeometry:
     """
 
     def __init__(
-        self, pad: float, client: Callable[[], int], sync_rows: Callable[[np.ndarray], None]
+        self,
+        pad: float,
+        client: Callable[[], int],
+        sync_rows: Callable[[np.ndarray], None],
+        world: World,
     ) -> None:
         self.pad = pad
         self._client = client
         self._sync_rows = sync_rows
+        self._world = world
         self._cap = 0
         self.owner = np.zeros(0, dtype=np.int64)
         self.mode = np.zeros(0, dtype=np.int8)
@@ -130,20 +141,34 @@ class CollisionGeometry:
     # ----- registration -------------------------------------------------------------------
 
     def register(self, rows: np.ndarray, store: KinematicState) -> None:
-        """Read body-frame geometry for rows new to the collision system, then their AABBs."""
+        """Read body-frame geometry for rows new to the collision system, then their AABBs.
+
+        Rows whose body is still pending need no body: their collision shape is known, and
+        only the first body of a shape not measured before is created, to measure it.
+        """
         client = self._client()
+        world = self._world
         bodies = store.body_id[rows].tolist()
-        shapes = [body_collision_shape(client, b) if b >= 0 else -1 for b in bodies]
+        shapes = [
+            body_collision_shape(client, b) if b >= 0 else world.pending_collision_shape(row)
+            for row, b in zip(rows.tolist(), bodies, strict=True)
+        ]
         by_shape: dict[int, list[int]] = {}
         for row, body, shape in zip(rows.tolist(), bodies, shapes, strict=True):
             if shape >= 0:
                 by_shape.setdefault(shape, []).append(row)
             else:
+                if body == PENDING_BODY:  # a pending body without a collision shape
+                    world.create_pending_body(row)
+                    body = int(store.body_id[row])
                 self._register_one(row, body, store, client)
         for shape, members in by_shape.items():
             info = self._shapes.get(shape)
             if info is None:
-                info = self._register_one(members[0], store.body_id[members[0]], store, client)
+                first = members[0]
+                if store.body_id[first] == PENDING_BODY:
+                    world.create_pending_body(first)
+                info = self._register_one(first, store.body_id[first], store, client)
                 self._shapes[shape] = info
             r = np.array(members, dtype=np.int64)
             center, half, box, box_center, box_half = info

@@ -22,6 +22,7 @@ import pybullet as p
 
 from fleet_async.core.base.types import CollisionDetectionMethod
 from fleet_async.core.collision.geometry import CollisionGeometry
+from fleet_async.core.world.pending import PENDING_BODY
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 __all__ = ["NarrowPhase"]
@@ -36,8 +37,9 @@ class NarrowPhase:
         geometry: The rows' collision geometry.
         method: CLOSEST_POINTS, CONTACT_POINTS or HYBRID.
         margin: Distance (m) at which CLOSEST_POINTS reports a pair.
-        client: Returns the PyBullet client id.
+        client: Returns the PyBullet client id (without creating pending bodies).
         sync_rows: Pushes the given rows' poses to PyBullet.
+        create_bodies: Creates every pending body (before a query that needs bodies).
     """
 
     def __init__(
@@ -47,12 +49,14 @@ class NarrowPhase:
         margin: float,
         client: Callable[[], int],
         sync_rows: Callable[[np.ndarray], None],
+        create_bodies: Callable[[], None],
     ) -> None:
         self._geo = geometry
         self.method = method
         self.margin = margin
         self._client = client
         self._sync_rows = sync_rows
+        self._create_bodies = create_bodies
 
     def touching(
         self,
@@ -129,6 +133,8 @@ class NarrowPhase:
         needs_body = row_pairs[rest[~known]]
         client = self._client()
         if len(needs_body):
+            if (store.body_id[needs_body] == PENDING_BODY).any():
+                self._create_bodies()
             self._sync_rows(np.unique(needs_body))
         bodies = store.body_id[row_pairs[rest]].tolist()
         pos_l = pos[rest].tolist()

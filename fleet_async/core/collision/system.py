@@ -66,11 +66,15 @@ class CollisionSystem:
         self.sweep = prm.collision_sweep
         pad = self.margin / 2 if self.method is not CollisionDetectionMethod.CONTACT_POINTS else 0.0
 
-        def client() -> int:
-            return sim.client
+        world = sim.world
 
-        self.geometry = CollisionGeometry(pad, client, on_sync)
-        self.narrow = NarrowPhase(self.geometry, self.method, self.margin, client, on_sync)
+        def client() -> int:  # checks need no body they do not ask for: none is created here
+            return world.client
+
+        self.geometry = CollisionGeometry(pad, client, on_sync, world)
+        self.narrow = NarrowPhase(
+            self.geometry, self.method, self.margin, client, on_sync, world.create_pending_bodies
+        )
         self._active = ActivePairs()
         self._colors: dict[int, list[Any]] = {}
         self._next_due_step = 0

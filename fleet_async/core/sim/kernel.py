@@ -98,6 +98,7 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
         self._motion_systems: list[MotionSystem] = [self._fleet, self._joint_motion]
         self._step_count = 0
         self._collision_count = 0
+        self._physics_bodies = self._params.physics or self._backend.is_gui
         self._paused = False
         self._initialized = False
         self._profiler = StepProfiler(
@@ -290,8 +291,8 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
             return None
         if not self._initialized:
             self.initialize_simulation()
-        if self._world.has_pending_bodies:
-            self._world.create_pending_bodies()
+        if self._physics_bodies and self._world.has_pending_bodies:
+            self._world.create_pending_bodies()  # dynamics collide with every body
         self._world.in_step = True
         try:
             if return_profiling or self._profiler.log_summary:

@@ -20,7 +20,12 @@ from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.world.attachments import Attachment, AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.links import resolve_link_index
-from fleet_async.core.world.pending import PENDING_BODY, PendingBodies, PendingBody
+from fleet_async.core.world.pending import (
+    PENDING_BODY,
+    Deferred,
+    PendingBodies,
+    PendingBodiesApi,
+)
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
@@ -32,7 +37,7 @@ __all__ = ["World"]
 logger = logging.getLogger(__name__)
 
 
-class World:
+class World(PendingBodiesApi):
     """Objects, rows and attachments of one simulation.
 
     Args:
@@ -69,9 +74,7 @@ class World:
         self._entity_buses = False
         self._pending = PendingBodies()
         self._body_list_stale = False
-        self._expected: (
-            tuple[PendingBody, Sequence[float] | np.ndarray, Sequence[float] | np.ndarray] | None
-        ) = None
+        self._expected: Deferred | None = None
         self.in_step = False
 
     @property
@@ -115,33 +118,6 @@ class World:
         """Whether any object of this simulation has ever had its own event bus (emitters of
         per-object events can skip building payloads while none has)."""
         return self._entity_buses
-
-    @property
-    def has_pending_bodies(self) -> bool:
-        """Whether spawned objects wait for their PyBullet bodies to be created."""
-        return len(self._pending) > 0
-
-    def create_pending_bodies(self) -> None:
-        """Create the PyBullet bodies of every object spawned with a pending body."""
-        if len(self._pending) and self._pending.create_all(self._store, self._backend.client):
-            self._body_list_stale = True
-
-    def sync_body_list(self) -> None:
-        """Make PyBullet's client-side body list (``getBodyInfo``, ``getNumBodies``) know every
-        body created in batches (``pybullet.syncBodyInfo``; about 80 us per body in the
-        world, so only raw access through ``obj.body_id`` asks for it)."""
-        if self._body_list_stale:
-            p.syncBodyInfo(physicsClientId=self._backend.client)
-            self._body_list_stale = False
-
-    def expect_pending(
-        self,
-        deferred: tuple[PendingBody, Sequence[float] | np.ndarray, Sequence[float] | np.ndarray]
-        | None,
-    ) -> None:
-        """The next object added with body id ``PENDING_BODY`` joins at this (body, position,
-        orientation) and its body is created later, with others; None withdraws it."""
-        self._expected = deferred
 
     def on_event_bus_created(self) -> None:
         """An object of this simulation created its event bus (``obj.events``)."""
@@ -352,8 +328,9 @@ class World:
     def on_collision_mode_changed(
         self, obj: SimObject, old: CollisionMode, new: CollisionMode
     ) -> None:
-        """Apply a collision mode change to PyBullet's contact filter."""
-        if obj.body_id < 0:
+        """Apply a collision mode change to PyBullet's contact filter (a pending body gets
+        the filter of its mode when it is created)."""
+        if obj.raw_body_id < 0:
             return
         if new is CollisionMode.DISABLED:
             p.setCollisionFilterGroupMask(
