@@ -24,7 +24,7 @@ from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionMode, MotionMode, coerce_enum
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
-from fleet_async.core.bodies.spawning import construct, create_bodies, reserve_body, wrap_all
+from fleet_async.core.bodies.spawning import construct, reserve_bodies, reserve_body, wrap_all
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.missions.agent_missions import AgentMissionApi
 from fleet_async.core.motion.chain import build_controller_chain
@@ -187,7 +187,8 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     def spawn_batch(  # type: ignore[override]  # takes AgentSpawnParams, as the seed
         cls, params_list: Sequence[AgentSpawnParams], sim_core: MultiRobotSimulationCore
     ) -> list[Agent]:
-        """Spawn many agents fast: shape-based bodies are created in batches.
+        """Spawn many agents fast: shape-based bodies are left pending or created in batches
+        (as ``from_params`` would).
 
         URDF agents are loaded one by one. Input order is kept; if anything fails, nothing
         this call created is left behind.
@@ -195,17 +196,21 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         params_list = list(params_list)
         shaped = [i for i, prm in enumerate(params_list) if prm.kind != "urdf"]
         with sim_core.batch_spawn():
-            bodies = create_bodies([params_list[i] for i in shaped], sim_core)
-            body_of = dict(zip(shaped, bodies, strict=True))
+            reserved = reserve_bodies([params_list[i] for i in shaped], sim_core)
+            body_of = dict(zip(shaped, reserved, strict=True))
 
             def make(i: int, body: int) -> Agent:
                 prm = params_list[i]
                 if prm.kind == "urdf":
                     return cls.from_params(prm, sim_core)
-                agent = cls(body_of[i], sim_core=sim_core, **_mesh_kwargs(prm))
+                kwargs = _mesh_kwargs(prm)
+                agent = construct(
+                    lambda b: cls(b, sim_core=sim_core, **kwargs), body, body_of[i][1], sim_core
+                )
                 return cls._finish_spawn(agent, prm, sim_core)
 
-            return wrap_all([body_of.get(i, -1) for i in range(len(params_list))], make, sim_core)
+            bodies = [body_of[i][0] if i in body_of else -1 for i in range(len(params_list))]
+            return wrap_all(bodies, make, sim_core)
 
     @classmethod
     def from_mesh(  # type: ignore[override]  # the seed's agent parameters, not SimObject's

@@ -15,8 +15,8 @@ from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.bodies.spawning import (
     construct,
-    create_bodies,
     load_sdf_objects,
+    reserve_bodies,
     reserve_body,
     wrap_all,
 )
@@ -75,26 +75,34 @@ class SimObjectConstructors:
     def spawn_batch(
         cls, params_list: Sequence[SimObjectSpawnParams], sim_core: MultiRobotSimulationCore
     ) -> list[SimObject]:
-        """Spawn many shape-based objects fast (bodies created in batches); input order kept.
+        """Spawn many shape-based objects fast (bodies pending or created in batches, as
+        ``from_params`` would); input order kept.
 
         If anything fails, nothing this call created is left behind.
         """
         params_list = list(params_list)
+        make = cast("type[SimObject]", cls)
         with sim_core.batch_spawn():
-            bodies = create_bodies(params_list, sim_core)
-            return wrap_all(
-                bodies,
-                lambda i, body: cast("type[SimObject]", cls)(
+            reserved = reserve_bodies(params_list, sim_core)
+
+            def build(i: int, body: int) -> SimObject:
+                prm = params_list[i]
+                return construct(
+                    lambda b: make(
+                        b,
+                        sim_core=sim_core,
+                        pickable=prm.pickable,
+                        mass=prm.mass,
+                        collision_mode=prm.collision_mode,
+                        name=prm.name,
+                        user_data=dict(prm.user_data),
+                    ),
                     body,
-                    sim_core=sim_core,
-                    pickable=params_list[i].pickable,
-                    mass=params_list[i].mass,
-                    collision_mode=params_list[i].collision_mode,
-                    name=params_list[i].name,
-                    user_data=dict(params_list[i].user_data),
-                ),
-                sim_core,
-            )
+                    reserved[i][1],
+                    sim_core,
+                )
+
+            return wrap_all([body for body, _ in reserved], build, sim_core)
 
     @classmethod
     def from_mesh(

@@ -37,6 +37,7 @@ __all__ = [
     "create_bodies",
     "create_body",
     "load_sdf_objects",
+    "reserve_bodies",
     "reserve_body",
     "wrap_all",
 ]
@@ -103,6 +104,27 @@ def construct(
         if body >= 0:
             p.removeBody(body, physicsClientId=0 if sim_core is None else sim_core.client)
         raise
+
+
+def reserve_bodies(
+    params_list: Sequence[SimObjectSpawnParams], sim: MultiRobotSimulationCore
+) -> list[tuple[int, Deferred | None]]:
+    """:func:`reserve_body` for many: bodies that can wait are left pending, the others are
+    created now in batches (:func:`create_bodies`). Input order kept.
+
+    Raises:
+        FileNotFoundError / ValueError: for bad shapes, before any body is created.
+    """
+    out: list[tuple[int, Deferred | None]] = [(-1, None)] * len(params_list)
+    now = []
+    for i, params in enumerate(params_list):
+        if sim.is_gui or (sim.params.physics and params.mass > 0):
+            now.append(i)
+        else:
+            out[i] = reserve_body(params, sim)
+    for i, body in zip(now, create_bodies([params_list[i] for i in now], sim), strict=True):
+        out[i] = (body, None)
+    return out
 
 
 def create_bodies(
