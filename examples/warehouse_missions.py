@@ -2,15 +2,17 @@
 
 Run:  python examples/warehouse_missions.py [--robots 6] [--orders 12] [--backend asyncio|trio]
                                             [--max-steps N] [--gui]
+ or:  fleet-async run examples/scenarios/warehouse.yaml   (the same shift, then a run summary)
 
 The warehouse is the scenario file examples/scenarios/warehouse.yaml: shelf racks and packing
 stations from a Gazebo world, a picker fleet from a grid entry, a patrol squad and a restocking
-run of its own. On top of it, a dispatcher coroutine starts one mission per picker. Each picker
-takes the next order from the shared order list, picks the tote at the shelf, drives to its
-station through a cross aisle, drops the tote there and comes back for more; a supervisor
-mission reports progress every 20 s of sim time. Everything happens in sim time: the step loop
-advances only when every mission is waiting, so the run is deterministic and much faster than
-real time.
+run of its own. The scenario names this file's ``shift`` as its mission (its ``missions:``
+section), so ``fleet-async run`` runs the same shift as this script. ``shift`` is a dispatcher:
+it starts one mission per picker. Each picker takes the next order from the shared order list,
+picks the tote at the shelf, drives to its station through a cross aisle, drops the tote there
+and comes back for more; a supervisor mission reports progress every 20 s of sim time.
+Everything happens in sim time: the step loop advances only when every mission is waiting, so
+the run is deterministic and much faster than real time.
 """
 
 from __future__ import annotations
@@ -45,20 +47,26 @@ class Order:
     station: int
 
 
-def build(
-    gui: bool, robots: int, orders: int
-) -> tuple[MultiRobotSimulationCore, list[Agent], list[Order]]:
-    """Load the warehouse scenario; name its pickers and totes; make the order list."""
+def build(gui: bool) -> MultiRobotSimulationCore:
+    """Load the warehouse scenario (headless and unpaced unless ``gui``)."""
     config = load_yaml_config(SCENARIO)
     config["simulation"].update(gui=gui, target_rtf=1.0 if gui else 0.0)
-    sim = MultiRobotSimulationCore.from_dict(config, source=str(SCENARIO), base_dir=SCENARIO.parent)
+    return MultiRobotSimulationCore.from_dict(
+        config, source=str(SCENARIO), base_dir=SCENARIO.parent
+    )
+
+
+def prepare(
+    sim: MultiRobotSimulationCore, robots: int, orders: int
+) -> tuple[list[Agent], list[Order]]:
+    """Name the first ``robots`` pickers and ``orders`` totes; make the order list."""
     fleet = sim.get_manager("pickers").objects[:robots]
     for i, robot in enumerate(fleet):
         robot.name = f"picker{i}"
-    totes = [o for o in sim.sim_objects if o.name == "tote"][:orders]
+    totes = [o for o in sim.sim_objects if (o.name or "").startswith("tote_")][:orders]
     for k, tote in enumerate(totes):
         tote.name = f"tote{k}"
-    return sim, fleet, [Order(k, tote, k % len(STATIONS)) for k, tote in enumerate(totes)]
+    return fleet, [Order(k, tote, k % len(STATIONS)) for k, tote in enumerate(totes)]
 
 
 def station_pose(station: int, slot: int) -> Pose:
@@ -116,12 +124,27 @@ async def run_shift(
     async def supervisor() -> None:
         while tally["delivered"] + tally["failed"] < len(orders):
             await sim.sleep(20.0)
-            say(f"progress: {tally['delivered']}/{len(orders)} delivered, {len(backlog)} waiting")
+            say(
+                f"progress: {tally['delivered']}/{len(orders)} delivered, "
+                f"{len(backlog)} not yet picked up"
+            )
 
     async with sim.task_group() as tg:
         tg.start_soon(supervisor, name="supervisor")
         for robot in fleet:
             tg.start_soon(robot_mission, robot, name=robot.name)
+    return tally
+
+
+async def shift(sim: MultiRobotSimulationCore, robots: int = 6, orders: int = 12) -> dict[str, int]:
+    """The scenario's mission: dispatch ``robots`` pickers to ``orders`` orders, then report."""
+    fleet, order_list = prepare(sim, robots, orders)
+    tally = await run_shift(sim, fleet, order_list)
+    print(
+        f"shift over: {tally['delivered']}/{len(order_list)} orders delivered, "
+        f"{tally['failed']} failed, {sim.sim_time:.1f} s of sim time, "
+        f"{sim.collision_count} contacts began (collisions)"
+    )
     return tally
 
 
@@ -136,26 +159,20 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
 
-    sim, fleet, orders = build(args.gui, args.robots, args.orders)
-    with sim:
+    with build(args.gui) as sim:
         tally = fa.run(
             sim,
-            run_shift,
+            shift,
             sim,
-            fleet,
-            orders,
+            args.robots,
+            args.orders,
             backend=args.backend,
             until=args.max_steps * sim.params.timestep,
         )
         if tally is None:
             print(f"stopped at the step limit ({args.max_steps} steps) before the shift ended")
             return 1
-        print(
-            f"shift over: {tally['delivered']}/{len(orders)} orders delivered, "
-            f"{tally['failed']} failed, {sim.sim_time:.1f} s of sim time, "
-            f"{sim.collision_count} collisions"
-        )
-    return 0 if tally["delivered"] == len(orders) else 1
+    return 0 if tally["delivered"] == args.orders else 1
 
 
 if __name__ == "__main__":

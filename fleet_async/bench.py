@@ -165,7 +165,8 @@ def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True)
         for _ in range(TIMED_STEPS):
             timings = sim.step_once(return_profiling=profile)
             for key, value in (timings or {}).items():
-                phases[key] = phases.get(key, 0.0) + value / TIMED_STEPS
+                if isinstance(value, float):  # not the nested collision_breakdown
+                    phases[key] = phases.get(key, 0.0) + value / TIMED_STEPS
         step_ms = (time.perf_counter() - t0) * 1000.0 / TIMED_STEPS
         moving = sum(a.is_moving for a in agents)
         collisions = sim.collision_count

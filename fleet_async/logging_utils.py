@@ -13,6 +13,7 @@ from fleet_async.core.base.logging_utils import (
     NamedLazyLogger,
     get_lazy_logger,
     get_named_lazy_logger,
+    lazy_log,
     wrap_existing_logger,
 )
 
@@ -21,5 +22,6 @@ __all__ = [
     "NamedLazyLogger",
     "get_lazy_logger",
     "get_named_lazy_logger",
+    "lazy_log",
     "wrap_existing_logger",
 ]

@@ -8,7 +8,7 @@ under ``fleet_async.run`` on both anyio backends (asyncio and trio), so it can `
         robot = Agent.from_mesh(box, box, Pose.from_xyz(0, 0, 0.1), sim_core=fleet_sim,
                                 controller="omni")
         await robot.move(Pose.from_xyz(2, 0, 0.1))
-        assert fleet_sim.step_count == 13
+        assert fleet_sim.step_count == 14  # 2 m at 2 m/s and 5 m/s^2: 1.4 s
 
 The simulation is headless (``pybullet.DIRECT``), unpaced, with timestep 0.1 s and seed 0;
 override the ``fleet_sim_params`` fixture to change that. Limit backends with

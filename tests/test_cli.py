@@ -82,9 +82,9 @@ def cli(
 
 
 def summary_of(stdout: str) -> dict[str, str]:
-    """``name: value`` lines of the run summary."""
+    """``name: value`` lines of the run summary, without the explanations in brackets."""
     pairs = (line.split(":", 1) for line in stdout.splitlines() if ":" in line)
-    return {name.strip(): value.strip() for name, value in pairs}
+    return {name.strip(): value.split(" (", 1)[0].strip() for name, value in pairs}
 
 
 def error_line(stderr: str) -> str:
@@ -122,15 +122,36 @@ def test_each_subcommand_explains_its_options(command, options, capsys):
         assert f"  {option} " in out, option
 
 
-def test_python_dash_m_runs_the_same_command():
+@pytest.mark.parametrize("module", ["fleet_async", "fleet_async.cli"])
+def test_python_dash_m_runs_the_same_command(module):
     result = subprocess.run(
-        [sys.executable, "-m", "fleet_async.cli", "--version"],
+        [sys.executable, "-m", module, "--version"],
         capture_output=True,
         text=True,
         check=False,
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == f"fleet-async {fleet_async.__version__}"
+
+
+def test_pybullet_output_is_hidden_unless_verbose(script, scenario):
+    quiet = cli(script, "run", scenario, "--duration", "1")
+    assert quiet.returncode == 0, quiet.stderr
+    assert "pybullet build time" not in quiet.stdout + quiet.stderr
+    assert summary_of(quiet.stdout)["steps"] == "10"
+    for argv in (["--verbose", "run", scenario], ["run", scenario, "--verbose"]):
+        loud = cli(script, *argv, "--duration", "1")
+        assert loud.returncode == 0, loud.stderr
+        assert "pybullet build time" in loud.stdout + loud.stderr
+        assert summary_of(loud.stdout)["steps"] == "10"
+
+
+def test_importing_the_command_line_does_not_import_pybullet():
+    code = "import sys, fleet_async.cli; print('pybullet' in sys.modules)"
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
+    assert result.stdout.strip() == "False", result.stdout + result.stderr
 
 
 # ----- run ------------------------------------------------------------------------------------
@@ -141,13 +162,17 @@ def test_run_prints_the_summary(script, scenario):
     assert result.returncode == 0, result.stderr
     summary = summary_of(result.stdout)
     assert summary["robots"] == "2"
-    assert summary["objects"] == "1 (not counting robots)"
+    assert summary["objects"] == "3"  # robots included, as the monitor counts
     assert summary["sim time"] == "10.000 s"
     assert summary["steps"] == "100"
     assert summary["actions completed"] == "4"
     assert summary["actions failed"] == "0"
     assert summary["collisions"] == "0"
+    assert summary["stopped"] == "the duration of 10 s was reached"
     assert "recording" not in summary
+    # Each count says what it counts.
+    assert "collisions:        0 (contacts that began" in result.stdout
+    assert "objects:           3 (every sim object, robots included)" in result.stdout
 
 
 def test_run_duration_option_overrides_the_scenario(script, scenario):
@@ -224,14 +249,26 @@ def test_run_missing_file_is_an_error(script, tmp_path):
     assert str(tmp_path / "nope.yaml") in error_line(result.stderr)
 
 
-def test_run_without_any_duration_asks_for_one(script, tmp_path):
-    path = tmp_path / "forever.yaml"
-    path.write_text("simulation:\n  timestep: 0.1\n")
+def test_run_without_a_duration_runs_until_the_actions_are_done(script, tmp_path):
+    path = tmp_path / "until_done.yaml"
+    path.write_text(SCENARIO.replace("  duration: 10.0\n", ""))
     result = cli(script, "run", path)
-    assert result.returncode == 2
-    line = error_line(result.stderr)
-    assert str(path) in line
-    assert "--duration" in line
+    assert result.returncode == 0, result.stderr
+    summary = summary_of(result.stdout)
+    # 1 m at 1 m/s with acceleration limits, then a 0.5 s wait: done at the step it ends.
+    assert summary["actions completed"] == "4"
+    assert summary["stopped"] == "its work is done"
+    assert float(summary["sim time"].split()[0]) < 5.0
+
+
+def test_run_without_a_duration_or_work_stops_at_the_cap(script, tmp_path):
+    path = tmp_path / "forever.yaml"
+    path.write_text("simulation:\n  timestep: 0.5\n")
+    result = cli(script, "run", path)
+    assert result.returncode == 0, result.stderr
+    summary = summary_of(result.stdout)
+    assert (summary["sim time"], summary["steps"]) == ("600.000 s", "1200")
+    assert "sets no duration" in result.stdout
 
 
 def test_load_scenario_is_unpaced_headless_unless_asked(tmp_path, monkeypatch):
@@ -282,17 +319,21 @@ def test_run_steps_steps_exactly_and_reports_each_frame(sim):
 
 
 def test_summary_lines():
-    summary = RunSummary(2, 1, 10.0, 100, 0.5, 4, 1, 3, recording="out.gif")
+    summary = RunSummary(
+        2, 3, 10.0, 100, 0.5, 4, 1, 3, missions=1, stopped="why", recording="out.gif"
+    )
     assert format_summary(summary).splitlines() == [
-        "robots:            2",
-        "objects:           1 (not counting robots)",
+        "robots:            2 (agents)",
+        "objects:           3 (every sim object, robots included)",
         "sim time:          10.000 s",
         "steps:             100",
         "wall time:         0.500 s",
         "real-time factor:  20.0x",
+        "missions:          1 (the scenario's missions: entries)",
         "actions completed: 4",
-        "actions failed:    1",
-        "collisions:        3",
+        "actions failed:    1 (failed or cancelled)",
+        "collisions:        3 (contacts that began: each time two objects started to touch)",
+        "stopped:           why",
         "recording:         out.gif",
     ]
 
@@ -348,6 +389,11 @@ def test_progress_bar_draws_nothing_when_not_a_terminal():
     assert stream.getvalue() == ""
 
 
+def test_format_progress_of_a_run_until_done_has_no_percentage():
+    line = format_progress(26.7, 600.0, 34.12, open_ended=True)
+    assert line == "running until done: 26.7 s (at most 600 s)  RTF 34.1x"
+
+
 def test_format_progress_clamps_and_handles_no_wall_time():
     assert format_progress(0.0, 4.0, float("inf"), width=4) == "[....]  0.0/4.0 s    0%  RTF -"
     assert format_progress(5.0, 4.0, 2.0, width=4) == "[####]  5.0/4.0 s  100%  RTF 2.0x"
@@ -356,8 +402,9 @@ def test_format_progress_clamps_and_handles_no_wall_time():
 # ----- examples -------------------------------------------------------------------------------
 
 
-def test_examples_list_names_scripts_and_scenarios(script):
-    result = cli(script, "examples", "--list")
+@pytest.mark.parametrize("flags", [[], ["--list"]])
+def test_examples_list_names_scripts_and_scenarios(script, flags):
+    result = cli(script, "examples", *flags)
     assert result.returncode == 0, result.stderr
     rows = {line.split()[0]: line for line in result.stdout.splitlines() if line.startswith("  ")}
     assert "Hello, fleet: four robots carry pallets" in rows["hello_fleet"]
@@ -405,12 +452,21 @@ def test_examples_copy_then_refuse_to_overwrite(script, tmp_path):
     assert (target / "hello_fleet.py").read_text() == "# my edits\n"
 
 
-def test_examples_outside_a_source_tree_say_where_they_looked(tmp_path, monkeypatch, capsys):
+def test_examples_missing_say_where_they_looked(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(fleet_async, "__file__", str(tmp_path / "fleet_async" / "__init__.py"))
-    assert main(["examples", "--list"]) == 2
+    assert main(["examples"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("fleet-async: error: the examples are not installed")
+    assert err.startswith("fleet-async: error: no examples found")
+    assert str(tmp_path / "fleet_async" / "examples") in err
     assert str(tmp_path / "examples") in err
+
+
+def test_examples_of_an_installed_package_come_from_inside_it(tmp_path, monkeypatch, capsys):
+    package = tmp_path / "site" / "fleet_async"
+    shutil.copytree(REPO / "examples", package / "examples")
+    monkeypatch.setattr(fleet_async, "__file__", str(package / "__init__.py"))
+    assert main(["examples"]) == 0
+    assert f"(from {package / 'examples'})" in capsys.readouterr().out
 
 
 # ----- bench ----------------------------------------------------------------------------------
@@ -442,3 +498,57 @@ def test_bench_json_matches_the_benchmark_script(script):
 def test_bench_rejects_a_non_positive_size(capsys):
     assert main(["bench", "--n", "0"]) == 2
     assert "fleet-async: error: --n: fleet sizes must be > 0, got 0" in capsys.readouterr().err
+
+
+def test_progress_bar_is_erased_before_other_output_and_comes_back():
+    now = [0.0]
+    stream = FakeTerminal()
+    bar = ProgressBar(600.0, stream, min_interval=0.1, clock=lambda: now[0], open_ended=True)
+    bar.start()
+    out = bar.guard(stream)
+    now[0] = 0.5
+    assert bar.update(5.0)
+    out.write("[t= 5.0 s] picker0 picked tote0\n")
+    now[0] = 1.0
+    bar.finish(10.0)
+    line = "running until done: 5.0 s (at most 600 s)  RTF 10.0x"
+    assert stream.getvalue() == (
+        f"\r{line}\r{' ' * len(line)}\r[t= 5.0 s] picker0 picked tote0\n"
+        "\rrunning until done: 10.0 s (at most 600 s)  RTF 10.0x\n"
+    )
+
+
+def test_native_output_is_hidden_and_python_output_is_not(tmp_path):
+    code = (
+        "import os, sys\n"
+        "from fleet_async.cli.native_output import native_output_hidden\n"
+        "with native_output_hidden() as hidden:\n"
+        "    os.write(1, b'from C on 1\\n'); os.write(2, b'from C on 2\\n')\n"
+        "    print('from Python'); print('to stderr', file=sys.stderr)\n"
+        "print(repr(hidden.text), hidden.line_count)\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == "from Python\n'from C on 1\\nfrom C on 2\\n' 2\n"
+    assert result.stderr == "to stderr\n"
+
+
+def test_the_summary_and_the_monitor_count_objects_alike(scenario, monkeypatch, capsys):
+    from fleet_async.core.view.monitor import SimulationMonitor
+
+    seen = []
+    monkeypatch.setattr(SimulationMonitor, "update", lambda self, *figures: seen.append(figures))
+    monkeypatch.setattr("fleet_async.core.view.monitor.DataMonitor.start", lambda self: None)
+    sim = load_scenario(scenario, gui_on=False, rtf=None)
+    try:
+        sim.params.monitor = True
+        sim.setup_monitor()
+        sim.update_monitor()
+    finally:
+        sim.close()
+    _, _, objects, agents, _ = seen[0]
+    assert main(["run", str(scenario), "--duration", "0.1"]) == 0
+    summary = summary_of(capsys.readouterr().out)
+    assert (summary["objects"], summary["robots"]) == (str(objects), str(agents)) == ("3", "2")

@@ -51,6 +51,7 @@ DOCUMENTED: dict[str, tuple[str, ...]] = {
         "SimulationParams",
     ),
     "data_monitor": ("DataMonitor",),
+    "events": ("EventBus", "SimEvents"),
     "geometry": (
         "Path",
         "Pose",
@@ -75,6 +76,7 @@ DOCUMENTED: dict[str, tuple[str, ...]] = {
         "NamedLazyLogger",
         "get_lazy_logger",
         "get_named_lazy_logger",
+        "lazy_log",
         "wrap_existing_logger",
     ),
     "sim_object": (
@@ -109,7 +111,10 @@ DOCUMENTED: dict[str, tuple[str, ...]] = {
     ),
 }
 """Names each reference module documents (``pybullet_fleet.data_monitor.main`` has no
-counterpart: fleet_async's monitor window is a child process that DataMonitor feeds)."""
+counterpart: fleet_async's monitor window is a child process that DataMonitor feeds), plus
+``events``: not in the reference documentation, but its ``SimObject.events`` example and the
+incumbent's scripts import ``SimEvents`` from ``pybullet_fleet.events``. ``lazy_log`` is the
+decorator the documentation's LazyLogger example uses."""
 
 
 @pytest.mark.parametrize(("module", "names"), DOCUMENTED.items())

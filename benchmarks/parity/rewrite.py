@@ -1,6 +1,6 @@
 """Port a pybullet_fleet script to fleet_async by rewriting its import statements.
 
-Two rewrites:
+Three rewrites:
 
 * :func:`map_imports` -- what the harness runs: every ``pybullet_fleet[.<module>]`` import
   becomes a lookup through ``parity_shim`` (top-level fleet_async names for now), so a
@@ -9,11 +9,14 @@ Two rewrites:
 * :func:`literal_import_check` -- the promise a user is given: rename ``pybullet_fleet`` to
   ``fleet_async`` and change nothing else. It builds a small program that tries each of the
   script's import statements, so the harness can say which ones a plain rename breaks.
+* :func:`plain_rename` -- that promise applied to the whole script, as a user's search and
+  replace would: the harness runs the result as it is.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from dataclasses import dataclass, field
 
 OLD = "pybullet_fleet"
@@ -130,3 +133,8 @@ def literal_import_check(source: str) -> str:
             f"    print('FAIL', {stmt!r}, '->', type(exc).__name__ + ': ' + str(exc))",
         ]
     return "\n".join(out) + "\n"
+
+
+def plain_rename(source: str) -> str:
+    """``source`` with every ``pybullet_fleet`` renamed ``fleet_async`` and nothing else."""
+    return re.sub(rf"\b{OLD}\b", NEW, source)

@@ -11,7 +11,10 @@ with ``pybullet_fleet`` imports, as a user's script would be. The incumbent runs
 its venv; fleet_async runs it with the imports rewritten (``rewrite.map_imports``). Each run
 prints a JSON trace (``parity_trace``); the harness diffs the two and prints, per script, the
 differences, which seed module paths the script needed, which names fleet_async only has
-privately, and whether the plain one-word rename would have imported at all.
+privately, and whether the plain one-word rename would have imported at all. It also runs
+each script on fleet_async with nothing but the rename (``pybullet_fleet`` -> ``fleet_async``,
+``rewrite.plain_rename``) and reports whether that run completes with the same trace: the
+promise made to a porting user.
 
 Not part of CI: nothing under ``tests/`` imports this.
 """
@@ -21,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -34,10 +38,13 @@ REPO = HERE.parents[1]
 sys.path.insert(0, str(HERE))
 
 from parity_trace import MARKER  # noqa: E402  # the harness's own directory, added above
-from rewrite import literal_import_check, map_imports  # noqa: E402
+from rewrite import literal_import_check, map_imports, plain_rename  # noqa: E402
 from tracediff import Difference, diff, show  # noqa: E402
 
 SUITES = ("scenarios", "seed_examples")
+NO_PLAIN_RENAME = "PARITY_NO_PLAIN_RENAME"
+"""A script whose source holds this marker is not run with the plain rename (it inspects the
+seed's ``pybullet_fleet.<module>`` paths itself, e.g. ``api_surface``)."""
 SEED_NAME = "seed/000_3dffb1b59eacdbf9.txt"
 # The seed (the API documentation) lives in the workspace's shared folder, beside the checkout.
 SEED = next(
@@ -65,6 +72,18 @@ class Result:
     seed_modules: list[str] = field(default_factory=list)
     literal: list[str] = field(default_factory=list)
     differences: list[Difference] = field(default_factory=list)
+    plain: Run | None = None
+    plain_differences: list[Difference] = field(default_factory=list)
+
+    @property
+    def plain_ok(self) -> bool:
+        """The script ran with the plain rename, as it did with the import mapping."""
+        return (
+            self.plain is not None
+            and self.plain.trace is not None
+            and self.plain.returncode == 0
+            and not self.plain_differences
+        )
 
 
 def discover(suites: list[str], pattern: str | None) -> list[Path]:
@@ -134,6 +153,14 @@ def run_script(script: Path, incumbent_python: str | None, workdir: Path, timeou
         check=False,
     )
     literal = [ln for ln in lit.stdout.splitlines() if ln.startswith("FAIL")]
+    plain = None
+    if NO_PLAIN_RENAME not in source:
+        (base / "plain").mkdir()
+        renamed = base / "plain" / script.name
+        renamed.write_text(plain_rename(source))
+        plain = execute(
+            sys.executable, renamed, _env("fleet_async", [REPO]), timeout, base / "plain"
+        )
     incumbent = None
     if incumbent_python:
         inc_env = _env("pybullet_fleet", [])
@@ -146,10 +173,27 @@ def run_script(script: Path, incumbent_python: str | None, workdir: Path, timeou
         incumbent,
         ported.seed_modules,
         literal,
+        plain=plain,
     )
+    if plain is not None:
+        # The mapped script has one more line (the shim import): error texts quote line numbers.
+        result.plain_differences = diff(
+            _without_line_numbers(_comparable(ours)), _without_line_numbers(_comparable(plain))
+        )
     if incumbent is not None:
         result.differences = diff(_comparable(incumbent), _comparable(ours))
     return result
+
+
+def _without_line_numbers(value: Any) -> Any:
+    """``value`` with the "(script line N)" of recorded errors taken out."""
+    if isinstance(value, str):
+        return re.sub(r" \(script line \d+\)", "", value)
+    if isinstance(value, dict):
+        return {k: _without_line_numbers(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_without_line_numbers(v) for v in value]
+    return value
 
 
 def _comparable(run: Run) -> dict[str, Any]:
@@ -165,6 +209,18 @@ def report(result: Result, show_traces: bool) -> None:
     print(f"   seed imports: {mods or '-'}")
     for line in result.literal:
         print(f"   plain rename: {line}")
+    plain = result.plain
+    if plain is None:
+        print("   plain rename: not applicable (the script reads the seed's module paths)")
+    elif result.plain_ok:
+        print("   plain rename: runs, same trace as with the import mapping")
+    elif plain is not None and plain.trace is None:
+        print(f"   plain rename: CRASHED: {plain.stderr_tail}")
+    else:
+        print(f"   plain rename: {len(result.plain_differences)} probes differ from the mapped run")
+        for d in result.plain_differences:
+            mapped, plain_value = show(d.incumbent, 50), show(d.ours)
+            print(f"      {show(d.path, 40):40} mapped {mapped:50} plain {plain_value}")
     notes = (result.ours.trace or {}).get("_import_notes", [])
     for note in notes:
         print(
@@ -201,7 +257,8 @@ def venv_python(venv: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the parity scripts and print the differences; exit 0 unless a script crashed."""
+    """Run the parity scripts and print the differences; exit 0 unless a script crashed on
+    fleet_async or a seed example does not run with the plain rename."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--incumbent", help="venv (or python) with pybullet-fleet 0.8.0")
     parser.add_argument("-k", dest="pattern", help="only scripts whose suite/name contains this")
@@ -234,11 +291,19 @@ def main(argv: list[str] | None = None) -> int:
         + ("" if inc_python else " (incumbent not run)")
         + f"; {len(crashed)} crashed on fleet_async"
     )
+    for suite in suites:
+        mine = [r for r in results if r.name.startswith(suite + "/") and r.plain is not None]
+        if mine:
+            good = sum(r.plain_ok for r in mine)
+            print(f"{suite}: {good}/{len(mine)} run on fleet_async with the plain rename")
+    plain_failed = [
+        r.name for r in results if r.name.startswith("seed_examples/") and not r.plain_ok
+    ]
     if args.json:
         Path(args.json).write_text(
             json.dumps([_as_json(r) for r in results], indent=1, sort_keys=True)
         )
-    return 1 if crashed else 0
+    return 1 if crashed or plain_failed else 0
 
 
 def _as_json(result: Result) -> dict[str, Any]:
@@ -246,6 +311,7 @@ def _as_json(result: Result) -> dict[str, Any]:
         "name": result.name,
         "seed_modules": result.seed_modules,
         "literal_rename": result.literal,
+        "plain_rename_ok": result.plain_ok,
         "fleet_async": result.ours.trace,
         "incumbent": result.incumbent.trace if result.incumbent else None,
         "differences": [[d.path, d.incumbent, d.ours] for d in result.differences],

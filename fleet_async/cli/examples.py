@@ -1,9 +1,11 @@
-"""``fleet-async examples``: list, run or copy the examples of the source tree.
+"""``fleet-async examples``: list (the default), run or copy the examples.
 
-The examples are not part of the installed package: they are the repository's top-level
-``examples/`` folder, next to the ``fleet_async`` package in a source checkout (an editable
-install). Python examples (``examples/*.py``) run as scripts with this Python; scenarios
-(``examples/scenarios/*.yaml``) run through ``fleet-async run``.
+The examples are written once, in the repository's top-level ``examples/`` folder. The build
+maps that folder into the wheel as ``fleet_async/examples/`` (``pyproject.toml`` /
+``setup.py``), so an installed fleet-async has them inside the package; a source checkout
+(an editable install, or ``PYTHONPATH``) uses ``examples/`` beside the package. Python examples
+(``*.py``) run as scripts, in this process, with the PyBullet output the command hides;
+scenarios (``scenarios/*.yaml``) run through ``fleet-async run``.
 """
 
 from __future__ import annotations
@@ -12,8 +14,8 @@ import argparse
 import ast
 import dataclasses
 import difflib
+import runpy
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
@@ -29,11 +31,12 @@ __all__ = [
     "execute",
     "find_example",
     "list_examples",
+    "run_script",
     "scenario_description",
     "script_description",
 ]
 
-USAGE = "fleet-async examples [-h] (--list | --run NAME [ARGS ...] | --copy DIR)"
+USAGE = "fleet-async examples [-h] [--list | --run NAME [ARGS ...] | --copy DIR]"
 _SKIPPED_PARTS = ("__pycache__",)
 _SKIPPED_SUFFIXES = (".pyc",)
 
@@ -59,19 +62,22 @@ class Example:
 
 
 def examples_dir() -> Path:
-    """Where the examples are: ``examples/`` next to the ``fleet_async`` package.
+    """Where the examples are: ``fleet_async/examples/`` in an installed package, else the
+    source tree's ``examples/`` beside the ``fleet_async`` package.
 
     Raises:
-        CliError: if that folder does not exist (a non-editable install), naming the path.
+        CliError: if neither exists, naming both paths.
     """
-    root = Path(fleet_async.__file__).resolve().parent.parent / "examples"
-    if not root.is_dir():
-        raise CliError(
-            "the examples are not installed with the fleet_async package: they live in the "
-            f"source tree's top-level examples/ folder, and there is none at {root}. Use a "
-            'source checkout (git clone, then pip install -e ".[test]") to get them.'
-        )
-    return root
+    package = Path(fleet_async.__file__).resolve().parent
+    candidates = (package / "examples", package.parent / "examples")
+    for root in candidates:
+        if (root / "scenarios").is_dir():
+            return root
+    raise CliError(
+        f"no examples found: looked in {candidates[0]} (an installed fleet-async) and "
+        f"{candidates[1]} (a source checkout). Reinstall fleet-async (pip install "
+        "--force-reinstall fleet-async) or use a source checkout."
+    )
 
 
 def script_description(path: Path) -> str:
@@ -156,7 +162,7 @@ def _print_list(root: Path) -> int:
 
 def _run_example(root: Path, argv: list[str]) -> int:
     if not argv:
-        raise CliError("examples --run: give the example's NAME (see: fleet-async examples --list)")
+        raise CliError("examples --run: give the example's NAME (see: fleet-async examples)")
     example = find_example(root, argv[0])
     extra = argv[1:]
     if example.kind == "scenario":
@@ -166,10 +172,35 @@ def _run_example(root: Path, argv: list[str]) -> int:
         )
         run_command.add_arguments(parser)
         return run_command.execute(parser.parse_args([str(example.path), *extra]))
+    return run_script(example.path, extra)
+
+
+def run_script(path: Path, argv: list[str]) -> int:
+    """Run the Python file ``path`` as ``__main__`` in this process, as ``python path argv``
+    would (its folder first on ``sys.path``); return its exit code."""
+    saved_argv, saved_path = sys.argv, list(sys.path)
+    sys.argv = [str(path), *argv]
+    sys.path.insert(0, str(path.parent))
     try:
-        return subprocess.run([sys.executable, str(example.path), *extra], check=False).returncode
+        runpy.run_path(str(path), run_name="__main__")
+    except SystemExit as exc:
+        return _exit_code(exc.code)
     except KeyboardInterrupt:
         return run_command.INTERRUPTED_EXIT_CODE
+    finally:
+        sys.argv = saved_argv
+        sys.path[:] = saved_path
+    return 0
+
+
+def _exit_code(code: object) -> int:
+    """The process exit code ``SystemExit(code)`` stands for."""
+    if code is None:
+        return 0
+    if isinstance(code, int):
+        return code
+    print(code, file=sys.stderr)
+    return 1
 
 
 def copy_examples(root: Path, destination: Path) -> list[Path]:
@@ -212,11 +243,12 @@ def copy_examples(root: Path, destination: Path) -> list[Path]:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the ``examples`` options to ``parser``."""
-    group = parser.add_mutually_exclusive_group(required=True)
+    group = parser.add_mutually_exclusive_group()
     group.add_argument(
         "--list",
         action="store_true",
-        help="list every example with a one-line description",
+        help="list every example with a one-line description (what the command does without "
+        "an option)",
     )
     group.add_argument(
         "--run",
@@ -239,10 +271,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def execute(args: argparse.Namespace) -> int:
     """Run the ``examples`` command; return the exit code."""
     root = examples_dir()
-    if args.list:
-        return _print_list(root)
     if args.run is not None:
         return _run_example(root, list(args.run))
+    if args.copy is None:
+        return _print_list(root)
     written = copy_examples(root, args.copy)
     print(f"copied {len(written)} files from {root} to {args.copy}")
     return 0

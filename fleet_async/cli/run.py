@@ -1,14 +1,17 @@
-"""``fleet-async run SCENARIO.yaml``: build a scenario, step it, print what happened.
+"""``fleet-async run SCENARIO.yaml``: build a scenario, run it, print what happened.
 
 The scenario is loaded exactly as ``MultiRobotSimulationCore.from_yaml`` loads it, with two
 settings decided by the command line instead of the file: ``gui`` (off unless ``--gui``) and,
 when the scenario does not set ``target_rtf``, no real-time pacing (the library default of 1.0
-is meant for interactive use; a command-line run goes as fast as it can).
+is meant for interactive use; a command-line run goes as fast as it can). The run itself is
+:func:`fleet_async.scenario_runner.run_scenario`: the scenario's missions and queued actions,
+for ``--duration`` / ``simulation.duration`` or until its work is done (at most 600 s).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import math
 import sys
@@ -25,10 +28,12 @@ from fleet_async.core.scenario.build import SCENARIO_SECTIONS
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
+from fleet_async.scenario_runner import DEFAULT_MAX_DURATION, ScenarioOutcome, run_scenario
 
 __all__ = [
     "ActionTally",
     "RunSummary",
+    "StepWatcher",
     "add_arguments",
     "execute",
     "format_summary",
@@ -86,8 +91,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--duration",
         type=_positive_float,
         metavar="S",
-        help="sim seconds to run (default: the scenario's simulation.duration; required when "
-        "that is not set or <= 0); the run takes the fewest whole steps covering it",
+        help="sim seconds to run (the fewest whole steps covering it). Default: the "
+        "scenario's simulation.duration; without one, until the scenario's missions have "
+        f"returned and its actions are done, at most {DEFAULT_MAX_DURATION:g} s",
     )
     parser.add_argument(
         "--gui",
@@ -121,6 +127,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=15,
         metavar="N",
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
+    )
+    parser.add_argument(
+        "--backend",
+        choices=("asyncio", "trio"),
+        default="asyncio",
+        help="the anyio event loop the scenario's missions run on (default: asyncio); the "
+        "run is the same on both",
     )
     parser.add_argument(
         "--quiet",
@@ -214,13 +227,16 @@ class RunSummary:
 
     Attributes:
         robots: Agents in the simulation at the end.
-        objects: Other sim objects at the end (not counting robots).
+        objects: Sim objects at the end, robots included (as the monitor counts them).
         sim_time: Sim seconds at the end.
         steps: Steps this run took.
-        wall_time: Wall seconds spent stepping (loading not included).
+        wall_time: Wall seconds spent running (loading not included).
         actions_completed: ``ACTION_COMPLETED`` events during the run.
         actions_failed: ``ACTION_FAILED`` events (failed or cancelled actions).
-        collisions: ``sim.collision_count`` at the end.
+        collisions: ``sim.collision_count`` at the end: contacts that began, that is how many
+            times a pair of objects started touching.
+        missions: The scenario's missions (its ``missions:`` entries).
+        stopped: Why the run stopped, for people (empty when interrupted).
         recording: The saved recording, if any.
         interrupted: Whether Ctrl+C stopped the run early.
     """
@@ -233,6 +249,8 @@ class RunSummary:
     actions_completed: int
     actions_failed: int
     collisions: int
+    missions: int = 0
+    stopped: str = ""
     recording: str | None = None
     interrupted: bool = False
 
@@ -243,19 +261,25 @@ class RunSummary:
 
 
 def format_summary(summary: RunSummary) -> str:
-    """The summary as aligned ``name: value`` lines."""
+    """The summary as aligned ``name: value (what it counts)`` lines."""
     rtf = summary.real_time_factor
     rows = [
-        ("robots", str(summary.robots)),
-        ("objects", f"{summary.objects} (not counting robots)"),
+        ("robots", f"{summary.robots} (agents)"),
+        ("objects", f"{summary.objects} (every sim object, robots included)"),
         ("sim time", f"{summary.sim_time:.3f} s"),
         ("steps", str(summary.steps)),
         ("wall time", f"{summary.wall_time:.3f} s"),
         ("real-time factor", f"{rtf:.1f}x" if math.isfinite(rtf) else "inf"),
+        ("missions", f"{summary.missions} (the scenario's missions: entries)"),
         ("actions completed", str(summary.actions_completed)),
-        ("actions failed", str(summary.actions_failed)),
-        ("collisions", str(summary.collisions)),
+        ("actions failed", f"{summary.actions_failed} (failed or cancelled)"),
+        (
+            "collisions",
+            f"{summary.collisions} (contacts that began: each time two objects started to touch)",
+        ),
     ]
+    if summary.stopped:
+        rows.append(("stopped", summary.stopped))
     if summary.recording is not None:
         rows.append(("recording", summary.recording))
     if summary.interrupted:
@@ -274,21 +298,9 @@ def execute(args: argparse.Namespace) -> int:
     except (ValueError, TypeError, OSError) as exc:
         raise CliError(str(exc)) from exc
     try:
-        return _run_loaded(sim, path, args)
+        return _run_loaded(sim, args)
     finally:
         sim.close()
-
-
-def _duration(sim: MultiRobotSimulationCore, path: Path, requested: float | None) -> float:
-    if requested is not None:
-        return requested
-    duration = sim.params.duration
-    if duration <= 0:
-        raise CliError(
-            f"{path}: the scenario sets no run length (simulation.duration = {duration}); "
-            "give one with --duration SECONDS"
-        )
-    return duration
 
 
 def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> None:
@@ -299,58 +311,89 @@ def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) ->
         raise CliError(f"--record {args.record}: {exc}") from exc
 
 
-def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
-    duration = _duration(sim, path, args.duration)
+class StepWatcher:
+    """After every step: the progress bar, GUI keys (SPACE pauses, here, until pressed again)
+    and the monitor.
+
+    Args:
+        sim: The simulation; the watcher listens to its POST_STEP event.
+        bar: The progress bar, or None.
+        sleep: Wall-clock sleep while paused (injectable for tests).
+    """
+
+    def __init__(
+        self,
+        sim: MultiRobotSimulationCore,
+        bar: ProgressBar | None,
+        sleep: Callable[[float], None] = time.sleep,
+    ) -> None:
+        self._sim = sim
+        self._bar = bar
+        self._sleep = sleep
+        self._start = sim.sim_time
+        sim.events.on(SimEvents.POST_STEP, self._after_step)
+
+    def _after_step(self, **_: Any) -> None:
+        sim = self._sim
+        if self._bar is not None:
+            self._bar.update(sim.sim_time - self._start)
+        if sim.is_gui:
+            gui.handle_keyboard(sim)
+            while sim.is_paused and sim.is_gui:  # missions wait in sim time: hold the clock
+                self._sleep(1.0 / sim.params.gui_min_fps)
+                gui.handle_keyboard(sim)
+        sim.update_monitor()
+
+
+def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | None:
+    if requested is not None:
+        return requested
+    return float(sim.params.duration) if sim.params.duration > 0 else None
+
+
+def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     tally = ActionTally(sim)
     if args.record:
         _start_recording(sim, args)
     if args.gui:
         sim.setup_monitor()
-    bar = ProgressBar(duration, sys.stderr) if not args.quiet else None
-    sim_start = sim.sim_time
-
-    def on_frame() -> None:
-        if sim.is_gui:
-            gui.handle_keyboard(sim)
-        if bar is not None:
-            bar.update(sim.sim_time - sim_start)
-
-    start_step, interrupted = sim.step_count, False
+    limit = _limit(sim, args.duration)
+    bar = (
+        ProgressBar(limit or DEFAULT_MAX_DURATION, sys.stderr, open_ended=limit is None)
+        if not args.quiet
+        else None
+    )
+    StepWatcher(sim, bar)
+    start_step, start_time = sim.step_count, sim.sim_time
+    outcome: ScenarioOutcome | None = None
     wall0 = time.perf_counter()
-    if bar is not None:
+    streams = sys.stdout, sys.stderr
+    if bar is not None and bar.enabled:
         bar.start()
+        sys.stdout, sys.stderr = bar.guard(sys.stdout), bar.guard(sys.stderr)
     try:
-        run_steps(sim, steps_for(duration, sim.params.timestep), on_frame)
-    except KeyboardInterrupt:
-        interrupted = True
+        with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C: summarise what ran
+            outcome = run_scenario(sim, limit, backend=args.backend)
+    finally:
+        sys.stdout, sys.stderr = streams
     wall = time.perf_counter() - wall0
     if bar is not None:
-        bar.finish(sim.sim_time - sim_start)
+        bar.finish(sim.sim_time - start_time)
     saved = sim.stop_recording() if args.record else None
     if not args.quiet:
-        steps = sim.step_count - start_step
-        print(format_summary(_summarize(sim, tally, steps, wall, saved, interrupted)))
-    return INTERRUPTED_EXIT_CODE if interrupted else 0
-
-
-def _summarize(
-    sim: MultiRobotSimulationCore,
-    tally: ActionTally,
-    steps: int,
-    wall: float,
-    recording: str | None,
-    interrupted: bool,
-) -> RunSummary:
-    robots = len(sim.agents)
-    return RunSummary(
-        robots=robots,
-        objects=len(sim.sim_objects) - robots,
-        sim_time=sim.sim_time,
-        steps=steps,
-        wall_time=wall,
-        actions_completed=tally.completed,
-        actions_failed=tally.failed,
-        collisions=sim.collision_count,
-        recording=recording,
-        interrupted=interrupted,
-    )
+        summary = RunSummary(
+            robots=sim.world.agent_count,  # the monitor's figures, so the two agree
+            objects=sim.world.object_count,
+            sim_time=sim.sim_time,
+            steps=sim.step_count - start_step,
+            wall_time=wall,
+            actions_completed=tally.completed,
+            actions_failed=tally.failed,
+            collisions=sim.collision_count,
+            missions=len(sim.scenario_missions),
+            stopped=outcome.describe() if outcome is not None else "",
+            recording=saved,
+            interrupted=outcome is None,
+        )
+        print(format_summary(summary))
+    return INTERRUPTED_EXIT_CODE if outcome is None else 0

@@ -2,10 +2,10 @@
 
 Its sub-packages are layers that import only downward at run time, from ``base`` up through
 ``geometry``, ``world``, ``collision``, ``bodies``, ``motion``, ``actions``, ``missions``,
-``agents``, ``sim`` and ``managers`` to ``scenario`` and ``view``; ``simulation.py`` assembles
-``MultiRobotSimulationCore`` on top (docs/architecture.md). Nothing in ``fleet_async.core``
-imports ``fleet_async.tasks``; the async mission layer sits on top of this package, reaches it
-through ``fleet_async.core.missions``, and never inside it.
+``agents``, ``sim``, ``managers`` and ``devices`` to ``scenario`` and ``view``;
+``simulation.py`` assembles ``MultiRobotSimulationCore`` on top (docs/architecture.md).
+Nothing in ``fleet_async.core`` imports ``fleet_async.tasks``; the async mission layer sits on
+top of this package, reaches it through ``fleet_async.core.missions``, and never inside it.
 """
 
 from fleet_async.core.actions.action import (
@@ -30,6 +30,7 @@ from fleet_async.core.base.config_utils import (
     merge_configs,
     resolve_class,
 )
+from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.events import EventBus, SimEvents
 from fleet_async.core.base.logging_utils import (
     LazyLogger,
@@ -59,8 +60,24 @@ from fleet_async.core.bodies.models import (
     remove_model_search_path,
     resolve_model,
 )
-from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.bodies.sim_object import ObjectRemovedError, SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.devices import (
+    DispenseAction,
+    Door,
+    DoorParams,
+    DoorType,
+    Elevator,
+    ElevatorParams,
+    ElevatorRequestPolicy,
+    ElevatorRequestResult,
+    ElevatorState,
+    IngestAction,
+    Workcell,
+    WorkcellKind,
+    WorkcellParams,
+    WorkcellPlugin,
+)
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.managers.agent_manager import AgentManager
@@ -104,13 +121,24 @@ __all__ = [
     "ControllerMode",
     "ControllerParams",
     "DataMonitor",
+    "DeviceEvents",
     "DifferentialController",
+    "DispenseAction",
+    "Door",
+    "DoorParams",
     "DoorState",
+    "DoorType",
     "DropAction",
     "DropPhase",
+    "Elevator",
+    "ElevatorParams",
+    "ElevatorRequestPolicy",
+    "ElevatorRequestResult",
+    "ElevatorState",
     "EventBus",
     "GridSpawnParams",
     "IKParams",
+    "IngestAction",
     "JointAction",
     "KinematicController",
     "LazyLogger",
@@ -119,6 +147,7 @@ __all__ = [
     "MovementDirection",
     "MultiRobotSimulationCore",
     "NamedLazyLogger",
+    "ObjectRemovedError",
     "OmniController",
     "Path",
     "PatrolController",
@@ -138,6 +167,10 @@ __all__ = [
     "SimulationRecorder",
     "SpatialHashCellSizeMode",
     "WaitAction",
+    "Workcell",
+    "WorkcellKind",
+    "WorkcellParams",
+    "WorkcellPlugin",
     "WorldLoadError",
     "WorldLoadFailure",
     "add_model_search_path",

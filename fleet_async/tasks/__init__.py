@@ -8,6 +8,7 @@ The core never imports this package: it exposes the awaitables and this runtime 
 """
 
 from fleet_async.tasks.conditions import AllOf, AnyOf
+from fleet_async.tasks.devices import device_resource, pass_through, ride
 from fleet_async.tasks.errors import (
     ActionCancelledError,
     ActionFailedError,
@@ -68,6 +69,9 @@ __all__ = [
     "Store",
     "TaskGroup",
     "Timeout",
+    "device_resource",
+    "pass_through",
+    "ride",
     "run",
     "run_async",
 ]

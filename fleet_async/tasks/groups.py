@@ -134,6 +134,10 @@ class TaskGroup:
     ) -> bool:
         nursery = self._nursery
         assert nursery is not None
+        if isinstance(exc, GeneratorExit):  # the run is stopping: its missions are closed
+            nursery.closed = True
+            self._scope.__exit__(None, None, None)
+            return False
         body_error = exc if exc is not None and not isinstance(exc, Cancelled) else None
         if body_error is not None:
             self._scope.cancel()
@@ -152,7 +156,12 @@ class TaskGroup:
         if interrupted is not None:
             self._scope.__exit__(None, None, None)
             raise interrupted
-        return self._scope.__exit__(exc_type, exc, tb)
+        swallowed = self._scope.__exit__(exc_type, exc, tb)
+        owner = self.kernel.current
+        if exc is None and owner is not None and owner.scope.cancelled():
+            # Leaving the group is a checkpoint: an outer scope was cancelled meanwhile.
+            raise self.kernel.cancelled_exc()
+        return swallowed
 
 
 def lone_error(exc: BaseException) -> BaseException:

@@ -206,6 +206,8 @@ class Kernel:
         """Cancel scopes that are cancelled and not yet exited (0: skip the level check)."""
         self.missions: dict[Mission, None] = {}
         """Missions alive, in start order."""
+        self.on_failure: Callable[[Mission, BaseException], None] | None = None
+        """Told about every mission that ends with an exception (not a cancellation)."""
         self.host_cancel: type[BaseException] | tuple[type[BaseException], ...] = ()
         """The host event loop's cancellation exception: it ends the run, not a mission."""
         self._what_is_outside = what_is_outside

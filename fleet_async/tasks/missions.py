@@ -39,7 +39,17 @@ class Mission(SimEvent):
             mission it starts ``(0, n)``, and so on (seeds ``sim.mission_rng()``).
     """
 
-    __slots__ = ("_children", "_coro", "_nursery", "cancelled", "key", "name", "scope", "target")
+    __slots__ = (
+        "_children",
+        "_coro",
+        "_nursery",
+        "_root_scope",
+        "cancelled",
+        "key",
+        "name",
+        "scope",
+        "target",
+    )
 
     def __init__(
         self, kernel: Kernel, coro: Any, name: str, key: tuple[int, ...], nursery: Nursery
@@ -54,7 +64,8 @@ class Mission(SimEvent):
         """Whether it ended by cancellation."""
         self.target: SimEvent | None = None
         """The event it is parked on (None while it runs or once it ended)."""
-        self.scope = CancelScope(kernel, owner=self, parent=nursery.cancel_scope, root=True)
+        self._root_scope = CancelScope(kernel, owner=self, parent=nursery.cancel_scope, root=True)
+        self.scope = self._root_scope
         """Its innermost cancel scope (its own root scope while it is in no other)."""
 
     def __repr__(self) -> str:
@@ -91,7 +102,7 @@ class Mission(SimEvent):
         """Cancel it: it raises Cancelled at its current (or next) sim await, its awaited action
         is cancelled, and it ends unless it catches the cancellation in a shielded scope."""
         if self.raw_value is PENDING:
-            self.scope.cancel()
+            self._root_scope.cancel()
 
     def interrupt(self, cause: Any = None) -> None:
         """Raise ``Interrupt(cause)`` inside it at its current await (an URGENT event at the
@@ -114,6 +125,8 @@ class Mission(SimEvent):
         target = self.target
         if target is not None and target.callbacks is not None and self in target.callbacks:
             target.callbacks.remove(self)
+            if target.abandon is not None:
+                target.abandon(self)
         try:
             self._coro.close()
         except BaseException:  # a finally block that awaits cannot run any more
@@ -121,10 +134,11 @@ class Mission(SimEvent):
         kernel = self.kernel
         kernel.missions.pop(self, None)
         self.target = None
-        self.scope.detach()
+        self._root_scope.detach()
         self.cancelled = True
         self.ok = False
         self.raw_value = MissionCancelledError(f"mission {self.name!r} was stopped with the run")
+        self._nursery.child_done(self, None)
 
     def child_key(self) -> tuple[int, ...]:
         """The key of the next mission this one starts."""
@@ -159,6 +173,8 @@ class Mission(SimEvent):
                 throw, value = True, RuntimeError(f"{request!r} belongs to another run")
                 continue
             if kernel.cancelled_open and not request.uncancellable and self.scope.cancelled():
+                if request.abandon is not None:  # it never waits: undo what the wait set up
+                    request.abandon(self)
                 throw, value = True, kernel.cancelled_exc()
                 continue
             callbacks = request.callbacks
@@ -175,7 +191,7 @@ class Mission(SimEvent):
         kernel.current = None
         del kernel.missions[self]
         self.target = None
-        self.scope.detach()
+        self._root_scope.detach()
         if quietly:
             self.ok, self.raw_value = False, value
             return
@@ -194,6 +210,8 @@ class Mission(SimEvent):
                     f"in mission {self.name!r} at sim time {kernel.now * kernel.timestep:.3f} s"
                 )
             self.ok, self.raw_value = False, value
+            if kernel.on_failure is not None:
+                kernel.on_failure(self, value)
         kernel.schedule(self)  # whoever joins it resumes
         self._nursery.child_done(self, error)
 

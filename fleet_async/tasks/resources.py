@@ -88,8 +88,7 @@ class Request(PutRequest):
         tb: TracebackType | None,
     ) -> None:
         self.cancel()
-        if exc_type is not GeneratorExit:
-            self.resource.release(self)
+        self.resource.release(self)  # also when a stopping run closes the mission
 
     async def __aenter__(self) -> Request:
         try:
@@ -239,7 +238,7 @@ class PreemptiveResource(Resource):
             victim = max(self.users, key=_request_key)
             if victim.key > request.key:
                 self.users.remove(victim)
-                if victim.mission is not None and victim.mission.is_alive:
+                if victim.mission is not None:  # an ended holder raises, as in SimPy
                     victim.mission.interrupt(
                         Preempted(by=request.mission, usage_since=victim.usage_since, resource=self)
                     )

@@ -238,9 +238,10 @@ def _by_key(mission: Mission) -> tuple[int, ...]:
 
 
 def _close_missions(runtime: Runtime, why: str) -> None:
-    """End the missions still alive without resuming them (their ``finally`` blocks run)."""
+    """End the missions still alive without resuming them (their ``finally`` blocks run),
+    the last started first, so that children end before the groups that wait for them."""
     missions = sorted(runtime.kernel.missions, key=_by_key)
     if missions:
         logger.warning("closing missions %s: %s", [m.name for m in missions], why)
-    for mission in missions:
+    for mission in reversed(missions):
         mission.close()

@@ -49,6 +49,7 @@ class Runtime:
         self.streams_waiting = 0
         self._outcomes: list[tuple[int, int, ActionWait]] = []
         self._bus_handlers: dict[str, Callable[..., None]] = {}
+        self.kernel.on_failure = self._on_mission_failed
         sim.events.on(SimEvents.ACTION_COMPLETED, self._on_action_end, priority=1_000_000)
         sim.events.on(SimEvents.ACTION_FAILED, self._on_action_end, priority=1_000_000)
 
@@ -101,6 +102,11 @@ class Runtime:
         wait = self.action_waits.pop(id(action), None)
         if wait is not None:
             wait.settle(in_step=bool(self.kernel.in_step))
+
+    def _on_mission_failed(self, mission: Mission, error: BaseException) -> None:
+        events = self.sim.events
+        if events.has_handlers(SimEvents.MISSION_FAILED):  # e.g. KPIs, a trace
+            events.emit(SimEvents.MISSION_FAILED, sim=self.sim, mission=mission.name, error=error)
 
     def add_bus_wait(self, wait: BusWait) -> None:
         """Register ``sim.events.wait`` (one bus handler per event name)."""
@@ -159,7 +165,12 @@ class Runtime:
         return CancelScope(self.kernel, step, shield, fail)
 
     def wait_action(self, agent: Any, action: Any) -> ActionWait:
-        """An event for a queued action (see :class:`~fleet_async.tasks.waits.ActionWait`)."""
+        """The event for a queued action (see :class:`~fleet_async.tasks.waits.ActionWait`);
+        asking twice for the same pending action gives the same event, which every waiter
+        shares."""
+        existing = self.action_waits.get(id(action))
+        if existing is not None and existing.action is action:
+            return existing
         return ActionWait(self, agent, action)
 
     def wait_until(self, predicate: Callable[[], bool]) -> PredicateWait:

@@ -71,14 +71,15 @@ class Store(Queueing):
         return False
 
     def try_get(self, request: StoreGet) -> bool:
-        """Hand the oldest matching item to ``request``; always go on with the next get (a
-        filtered get that cannot be served does not block the ones behind it)."""
+        """Hand the oldest matching item to ``request``. After a plain get, stop (one get per
+        turn, SimPy's Store); after a filtered one, go on (a filtered get that cannot be
+        served does not block the ones behind it, SimPy's FilterStore)."""
         for i, item in enumerate(self.items):
             if request.filter is None or request.filter(item):
                 del self.items[i]
                 request.succeed(item)
                 break
-        return True
+        return request.filter is not None
 
     def restore(self, request: StoreGet) -> None:  # type: ignore[override]  # its own gets
         """Put the item a cancelled get took back in front, and serve the gets again."""
@@ -89,8 +90,14 @@ class Store(Queueing):
         self.items.append(item)
 
 
-FilterStore = Store
-"""Store already takes a filter per get (SimPy's FilterStore)."""
+class FilterStore(Store):
+    """A Store whose every get may take a filter, and whose gets never block each other
+    (SimPy's FilterStore: all waiting gets are tried on every turn)."""
+
+    def try_get(self, request: StoreGet) -> bool:
+        """Hand the oldest matching item to ``request``; go on with the next get."""
+        super().try_get(request)
+        return True
 
 
 class PriorityItem(NamedTuple):

@@ -38,10 +38,8 @@ class Event(SimEvent):
         kernel = kernel_of(self._sim, what)
         if self.kernel is not kernel:  # made before this run (or in an earlier one)
             self.kernel = kernel
-            if self.raw_value is not PENDING:
-                self.callbacks = None  # set back then: it counts as processed
-            elif self.callbacks is None or self.callbacks:
-                self.callbacks = []
+            # Set back then, it counts as processed; if not, whoever waited then is gone.
+            self.callbacks = None if self.raw_value is not PENDING else []
         return kernel
 
     def is_set(self) -> bool:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import logging
 
 import numpy as np
 import pytest
@@ -403,12 +404,31 @@ def test_reset_cancels_unfinished_actions_with_a_reason(sim):
     assert failed == [(object_id, move), (object_id, wait)]
 
 
-def test_moves_fail_with_a_reason_when_the_agent_cannot_move(sim):
+def test_a_queued_move_on_a_fixed_base_is_skipped_with_a_warning(sim, caplog):
+    # Seed, agent.set_goal_pose: "This is ignored if the robot has a fixed base".
     fixed = robot(sim, use_fixed_base=True)
     move = MoveAction(path=Pose.from_xyz(3, 0, 0.1))
+    wait = WaitAction(duration=0.2)
+    fixed.add_action_sequence([move, wait])
+    with caplog.at_level(logging.WARNING):
+        sim.step_once()
+    assert move.status is ActionStatus.COMPLETED and move.error_message is None
+    assert (move.start_time, move.end_time) == (0.0, 0.0)
+    assert "MoveAction skipped" in caplog.text and "fixed base" in caplog.text
+    assert fixed.get_pose().x == 0.0 and fixed.get_current_action() is wait
+
+
+def test_an_awaited_move_on_a_fixed_base_fails_with_the_reason(sim):
+    # The mission API marks what it submits as awaited, so the mission sees why.
+    fixed = robot(sim, use_fixed_base=True)
+    move = MoveAction(path=Pose.from_xyz(3, 0, 0.1))
+    move.awaited = True
     fixed.add_action(move)
     sim.step_once()
     assert move.status is ActionStatus.FAILED and "fixed base" in move.error_message
+
+
+def test_moves_fail_with_a_reason_when_the_agent_has_no_base_controller(sim):
     frozen = robot(sim, xyz=(0.0, 5.0, 0.1))
     frozen.set_controller(None)
     pick = PickAction(target_object_id=crate(sim, (3.0, 5.0, 0.1)).body_id)

@@ -52,11 +52,20 @@ def test_static_and_disabled_modes(method):
         ghost = cube(sim, 0.0, y=0.2, mode=CollisionMode.DISABLED)
         robot = cube(sim, 0.1, y=0.2)
         pairs, _ = sim.check_collisions()
-        # the robot touches both walls; walls never pair with each other; the ghost with nobody
+        # The robot touches both walls; with ignore_static_collision=False the two overlapping
+        # walls are reported too (seed, filter_aabb_pairs: "ignore_static - If True, skip
+        # collision checks with static objects"); the ghost pairs with nobody.
         assert pairs == sorted(
-            [(wall.object_id, robot.object_id), (other_wall.object_id, robot.object_id)]
+            [
+                (wall.object_id, other_wall.object_id),
+                (wall.object_id, robot.object_id),
+                (other_wall.object_id, robot.object_id),
+            ]
         )
         assert all(ghost.object_id not in pair for pair in pairs)
+        robot.set_pose(Pose.from_xyz(5.0, 0.2, 0.5))
+        pairs, _ = sim.check_collisions()  # the walls never move: their pair stays active
+        assert pairs == [(wall.object_id, other_wall.object_id)]
 
 
 def test_ignore_static_collision_hides_static_pairs():
@@ -375,7 +384,7 @@ def _head_on(sweep, gap, lane=0.0, shape=None):
         return log
 
 
-@pytest.mark.parametrize("gap", [1.0, 1.2])
+@pytest.mark.parametrize("gap", [0.9, 1.3])
 def test_swept_check_reports_robots_that_pass_through_each_other_in_one_step(gap):
     # At 0.4 m per step of closing speed, neither end pose of the crossing step overlaps.
     assert _head_on(False, gap) == []
@@ -387,8 +396,8 @@ def test_swept_check_reports_robots_that_pass_through_each_other_in_one_step(gap
 def test_swept_check_keeps_near_misses_and_touches_apart():
     # Parallel lanes: faces pass 0.1 m apart (no contact), then 0.015 m apart (within the
     # 0.02 m margin: a contact whether or not the check is swept).
-    assert _head_on(True, 1.0, lane=0.2) == []
-    assert [e for e, _ in _head_on(True, 1.0, lane=0.115)] == [
+    assert _head_on(True, 0.9, lane=0.2) == []
+    assert [e for e, _ in _head_on(True, 0.9, lane=0.115)] == [
         SimEvents.COLLISION_STARTED,
         SimEvents.COLLISION_ENDED,
     ]
@@ -407,8 +416,8 @@ def test_swept_check_keeps_near_misses_and_touches_apart():
 
 def test_swept_check_of_other_shapes_uses_the_closest_approach():
     ball = ShapeParams("sphere", radius=0.05)
-    assert _head_on(False, 1.0, shape=ball) == []
-    assert [e for e, _ in _head_on(True, 1.0, shape=ball)] == [
+    assert _head_on(False, 0.9, shape=ball) == []
+    assert [e for e, _ in _head_on(True, 0.9, shape=ball)] == [
         SimEvents.COLLISION_STARTED,
         SimEvents.COLLISION_ENDED,
     ]

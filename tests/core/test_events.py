@@ -7,7 +7,8 @@ import pytest
 from fleet_async import EventBus, SimEvents
 
 
-def test_handlers_run_by_descending_priority_then_registration_order():
+def test_handlers_run_by_ascending_priority_then_registration_order():
+    # As the reference API's bus: "Lower priority = executed first", equal priority FIFO.
     bus = EventBus()
     calls = []
     bus.on("e", lambda **kw: calls.append("low"), priority=-1)
@@ -15,7 +16,35 @@ def test_handlers_run_by_descending_priority_then_registration_order():
     bus.on("e", lambda **kw: calls.append("high"), priority=5)
     bus.on("e", lambda **kw: calls.append("second0"))
     assert bus.emit("e") == 4
-    assert calls == ["high", "first0", "second0", "low"]
+    assert calls == ["low", "first0", "second0", "high"]
+
+
+def test_a_handler_gets_only_the_payload_keys_it_names():
+    bus = EventBus()
+    seen = []
+    bus.on("e", lambda other: seen.append(("named", other)))
+    bus.on("e", lambda other, *, sim=None: seen.append(("kw-only", other, sim)))
+    bus.on("e", lambda **kw: seen.append(("all", sorted(kw))))
+    bus.emit("e", sim="S", obj_a=1, obj_b=2, other=2)
+    assert seen == [("named", 2), ("kw-only", 2, "S"), ("all", ["obj_a", "obj_b", "other", "sim"])]
+    bus.on("f", lambda missing: None)
+    with pytest.raises(TypeError, match="missing"):
+        bus.emit("f", other=1)
+
+
+def test_on_change_reports_subscriptions():
+    changes = []
+    bus = EventBus(on_change=changes.append)
+
+    def handler(**kw):
+        pass
+
+    bus.on("a", handler)
+    bus.off("a", handler)
+    bus.off("a", handler)  # not subscribed: no change
+    bus.on("b", handler)
+    bus.clear()
+    assert changes == ["a", "a", "b", "b"]
 
 
 def test_payload_is_passed_as_keywords():
@@ -73,7 +102,7 @@ def test_log_mode_logs_and_continues(caplog):
     def boom(**kw):
         raise RuntimeError("bad handler")
 
-    bus.on("e", boom, priority=1)
+    bus.on("e", boom, priority=-1)
     bus.on("e", lambda **kw: calls.append(1))
     with caplog.at_level(logging.ERROR):
         bus.emit("e")
@@ -106,5 +135,5 @@ def test_bad_arguments_are_rejected():
 
 def test_sim_events_lists_every_name_once():
     names = SimEvents.all()
-    assert len(names) == len(set(names)) == 16
+    assert len(names) == len(set(names)) == 17
     assert SimEvents.PRE_STEP in names and SimEvents.ACTION_FAILED in names

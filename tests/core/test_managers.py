@@ -513,8 +513,8 @@ def test_set_goal_pose_all_and_moving_count(sim):
     sim.step_once()
     assert manager.get_moving_count() == 3
     steps = run_until_idle(sim, manager)
-    # 2 m at 2 m/s, 5 m/s^2, dt 0.1: 3 steps up (0.3 m), 7 at 0.2 m, 3 down: 13 in all.
-    assert steps + 1 == 13
+    # 2 m at 2 m/s, 5 m/s^2, dt 0.1: 0.4 s up (0.4 m), 0.6 s at 2 m/s, 0.4 s down: 14 steps.
+    assert steps + 1 == 14
     assert manager.get_moving_count() == 0
     assert positions(agents) == [[2.0, 0.0, 0.1], [2.0, 2.0, 0.1], [2.0, 4.0, 0.1]]
 
@@ -529,7 +529,8 @@ def test_stop_all_stops_every_agent_where_it_is(sim):
     assert manager.get_moving_count() == 0 and all(a.goal_pose is None for a in agents)
     for _ in range(5):
         sim.step_once()
-    assert positions(agents) == stopped and stopped[0][0] == pytest.approx(0.3)
+    # 0.3 s from rest at 5 m/s^2: 5 * 0.3^2 / 2 = 0.225 m.
+    assert positions(agents) == stopped and stopped[0][0] == pytest.approx(0.225)
 
 
 def test_action_helpers_queue_for_every_agent(sim):

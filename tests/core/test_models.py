@@ -21,7 +21,13 @@ from fleet_async.core.bodies.models import (
     resolve_model,
 )
 
-PROJECT_MODELS = ["arm_robot", "mobile_manipulator", "mobile_robot", "simple_cube"]
+PROJECT_MODELS = [
+    "arm_robot",
+    "mobile_manipulator",
+    "mobile_robot",
+    "rail_arm_robot",
+    "simple_cube",
+]
 PYBULLET_MODELS = {
     "panda": "franka_panda/panda.urdf",
     "kuka_iiwa": "kuka_iiwa/model.urdf",

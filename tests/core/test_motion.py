@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from fleet_async import Agent, Path, Pose, ShapeParams
+from fleet_async import Agent, MoveAction, MultiRobotSimulationCore, Path, Pose, ShapeParams
+from tests.conftest import headless_params
 
 DT = 0.1
 TOL = 1e-9
@@ -46,13 +47,16 @@ def test_omni_trapezoid_reaches_goal_exactly_within_limits(sim):
     speeds = np.array([np.linalg.norm(v) for _, _, v, _ in trace])
     assert speeds.max() <= 2.0 + TOL
     assert np.abs(accelerations(list(speeds[:, None]))).max() <= 5.0 + 1e-6
-    # Per-step speeds ramp by a*dt = 0.5 m/s: 0.5, 1.0, 1.5 (0.3 m), cruise at 2.0 m/s for
-    # 9.4 m (47 steps), then 1.5, 1.0, 0.5 (0.3 m): 53 steps, ending exactly on the goal.
-    assert speeds[:4] == pytest.approx([0.5, 1.0, 1.5, 2.0])
-    assert speeds[-4:] == pytest.approx([2.0, 1.5, 1.0, 0.5])
-    assert len(trace) == 53 and np.isclose(speeds, 2.0).sum() == 47
+    # The exact trapezoid, sampled each step: 0.4 s (4 steps, 0.4 m) accelerating at 5 m/s^2,
+    # so the mean speeds of those steps are 0.25, 0.75, 1.25, 1.75 m/s; cruise at 2.0 m/s for
+    # 9.2 m (46 steps), then brake symmetrically: 54 steps (5.4 s), ending exactly on the goal.
+    # The first step moves a * dt^2 / 2 = 0.025 m, the most a start from rest allows.
+    assert trace[0][0][0] == pytest.approx(0.025)
+    assert speeds[:5] == pytest.approx([0.25, 0.75, 1.25, 1.75, 2.0])
+    assert speeds[-5:] == pytest.approx([2.0, 1.75, 1.25, 0.75, 0.25])
+    assert len(trace) == 54 and np.isclose(speeds, 2.0).sum() == 46
     assert agent.motion_result is True
-    assert agent.velocity[0] == pytest.approx(0.5)  # the arrival step's own velocity
+    assert agent.velocity[0] == pytest.approx(0.25)  # the arrival step's own velocity
     sim.step_once()
     assert agent.velocity.tolist() == [0.0, 0.0, 0.0]
 
@@ -188,7 +192,8 @@ def test_cmd_vel_accelerates_to_the_command_within_limits(sim):
     for _ in range(20):
         sim.step_once()
         speeds.append(float(np.linalg.norm(agent.velocity)))
-    assert speeds[0] == pytest.approx(0.2) and speeds[3] == pytest.approx(0.8)
+    # The command ramps by a * dt = 0.2 m/s per step; each step covers its mean speed.
+    assert speeds[:5] == pytest.approx([0.1, 0.3, 0.5, 0.7, 0.8])
     assert speeds[-1] == pytest.approx(0.8) and agent.angular_velocity == pytest.approx(0.5)
     assert agent.is_moving
     with pytest.raises(ValueError, match="sideways"):
@@ -240,3 +245,76 @@ def test_many_agents_move_independently_in_one_pass(sim):
     for i, agent in enumerate(agents):
         assert agent.get_pose().position.tolist() == [i, 3 + i % 4, 0.1]
         assert not agent.is_moving
+
+
+# ----- timing of the exact trapezoid (issue 15, item 5) -------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("distance", "timestep", "steps"),
+    [
+        (2.0, 0.1, 14),  # 0.4 s up, 0.6 s at 2 m/s, 0.4 s down: 1.4 s
+        (2.0, 0.01, 140),
+        (10.0, 0.1, 54),  # 5.4 s
+        (0.3, 0.1, 5),  # a triangle: 2 * sqrt(0.3 / 5) = 0.49 s, done in the step covering it
+    ],
+)
+def test_a_move_takes_the_fastest_time_the_limits_allow(distance, timestep, steps):
+    with MultiRobotSimulationCore(headless_params(timestep=timestep)) as sim:
+        agent = spawn(sim, "omni")
+        action = MoveAction(path=Pose.from_xyz(distance, 0.0, 0.1))
+        agent.add_action(action)
+        trace = run(sim, agent, max_steps=10 * steps)
+        assert len(trace) == steps
+        assert action.is_complete() and sim.step_count == steps
+        assert action.start_time == 0.0
+        assert action.end_time == pytest.approx(steps * timestep, abs=1e-12)
+        assert agent.get_pose().position.tolist() == [distance, 0.0, 0.1]
+
+
+def test_every_step_stays_within_what_the_limits_allow_from_rest(sim):
+    agent = spawn(sim, {"type": "omni", "max_linear_vel": 2.0, "max_linear_accel": 5.0})
+    agent.set_goal_pose(Pose.from_xyz(2.0, 0.0, 0.1))
+    xs = [0.0] + [float(p[0]) for p, _, _, _ in run(sim, agent)]
+    # Sampled exactly: x(t) = a t^2 / 2 while accelerating, then 2 m/s, then the mirror image.
+    assert xs[1:5] == pytest.approx([0.025, 0.1, 0.225, 0.4])
+    assert xs[-5:] == pytest.approx([1.6, 1.775, 1.9, 1.975, 2.0])
+    steps = np.diff(xs)
+    assert steps.max() <= 2.0 * DT + TOL
+    # Between two steps the mean speed changes by at most a * dt.
+    assert np.abs(np.diff(np.concatenate([[0.0], steps / DT, [0.0]]))).max() <= 5.0 * DT + 1e-9
+
+
+def test_omni_final_orientation_align_drives_then_turns(sim):
+    agent = spawn(sim, "omni")
+    agent.set_goal_pose(Pose.from_euler(2.0, 0.0, 0.1, yaw=math.pi / 2))
+    trace = run(sim, agent)
+    yaws = [yaw for _, yaw, _, _ in trace]
+    xs = [float(p[0]) for p, _, _, _ in trace]
+    arrival = xs.index(2.0)
+    assert arrival == 13  # the 14th step arrives, still at yaw 0
+    assert all(y == pytest.approx(0.0) for y in yaws[: arrival + 1])
+    # Then it turns in place: 90 degrees at 3 rad/s, 10 rad/s^2 take 0.3 + (pi / 2) / 3 s, 9 steps.
+    assert all(x == 2.0 for x in xs[arrival:])
+    assert yaws[-1] == pytest.approx(math.pi / 2)
+    assert len(trace) == arrival + 1 + 9
+
+
+def test_omni_path_keeps_its_orientation_through_intermediate_waypoints(sim):
+    agent = spawn(sim, "omni")
+    path = [Pose.from_euler(1.0, 0.0, 0.1, yaw=1.0), Pose.from_euler(1.0, 1.0, 0.1, yaw=-2.0)]
+    agent.set_path(path)
+    trace = run(sim, agent)
+    at_corner = next(i for i, (p, _, _, _) in enumerate(trace) if p.tolist() == [1.0, 0.0, 0.1])
+    assert trace[at_corner][1] == pytest.approx(0.0)
+    assert agent.get_pose().yaw == pytest.approx(-2.0)
+
+
+def test_cmd_vel_first_step_moves_half_a_dt_squared(sim):
+    agent = spawn(sim, {"type": "omni", "max_linear_vel": 2.0, "max_linear_accel": 5.0})
+    agent.set_cmd_vel(vx=2.0)
+    xs = []
+    for _ in range(6):
+        sim.step_once()
+        xs.append(agent.get_pose().x)
+    assert xs == pytest.approx([0.025, 0.1, 0.225, 0.4, 0.6, 0.8])

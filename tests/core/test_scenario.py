@@ -25,6 +25,7 @@ from fleet_async import (
     SimPlugin,
 )
 from fleet_async.core.base.config_utils import load_yaml_config
+from fleet_async.core.devices import Device
 from fleet_async.core.managers import sim_object_manager as managers
 from fleet_async.core.scenario import build as scenario
 
@@ -653,6 +654,7 @@ def test_example_scenario_runs_headless(build, path):
     assert failed == []
     standby = sim.get_manager("pickers")  # warehouse.yaml: dispatched by a script, idle here
     idle = set() if standby is None else {a.object_id for a in standby.objects}
+    idle |= {a.object_id for a in sim.agents if isinstance(a, Device)}  # move when asked
     assert sim.agents and all(
         not np.allclose(now, then)
         for agent, now, then in zip(sim.agents, positions(sim.agents), start, strict=True)
@@ -660,8 +662,13 @@ def test_example_scenario_runs_headless(build, path):
     )
     if path.name == "warehouse.yaml":
         names = [o.name for o in sim.sim_objects]
-        assert sum(n.startswith("shelf_") for n in names) == 9 and names.count("tote") == 12
-        assert len(standby.objects) == 6 and names.count("patrol") == 2
+        # A named grid entry names its objects <name>_0, <name>_1, ... (three tote grids).
+        assert sum(n.startswith("shelf_") for n in names) == 9
+        assert sorted(n for n in names if n.startswith("tote_")) == sorted(
+            f"tote_{k}" for k in range(4) for _ in range(3)
+        )
+        assert len(standby.objects) == 6
+        assert sorted(n for n in names if n.startswith("patrol")) == ["patrol_0", "patrol_1"]
         pallet = next(o for o in sim.sim_objects if o.name == "pallet")
         for _ in range(800):
             sim.step_once()

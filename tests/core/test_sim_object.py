@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -145,13 +146,11 @@ def test_spawn_params_from_yaml_style_dict(sim):
         ({"mass": -1}, "mass.*-1"),
         ({"collision_mode": "solid"}, "collision_mode.*solid"),
         ({"colour": [1, 0, 0, 1]}, "colour"),
-        (
-            {"pose": [0, 0, 0], "initial_pose": Pose.from_xyz(1, 1, 1)},
-            "either 'pose' or 'initial_pose'",
-        ),
+        ({}, "missing required 'name'"),
     ],
 )
 def test_bad_spawn_config(config, match):
+    config = {"name": "box", **config} if config else config
     with pytest.raises(ValueError, match=match):
         SimObjectSpawnParams.from_dict(config)
 
@@ -254,7 +253,7 @@ def test_nested_attachments_follow_in_order(sim):
     assert np.allclose(c.get_pose().position, [11, 1, 0])
 
 
-def test_keep_world_pose_and_link_attachment(sim):
+def test_keep_world_pose_and_link_attachment(sim, caplog):
     r2d2 = SimObject(p.loadURDF("r2d2.urdf", [0, 0, 0.5], physicsClientId=sim.client), sim_core=sim)
     item = box(sim, x=0.3, y=0.1, z=1.2)
     before = item.get_pose()
@@ -262,8 +261,13 @@ def test_keep_world_pose_and_link_attachment(sim):
     assert np.allclose(item.get_pose().position, before.position, atol=1e-9)
     r2d2.set_pose(Pose.from_xyz(2, 0, 0.5))
     assert np.allclose(item.get_pose().position, before.position + np.array([2, 0, 0]), atol=1e-9)
-    with pytest.raises(ValueError, match="no_such_link"):
-        r2d2.attach_object(box(sim), parent_link_index="no_such_link")
+    # Seed, attach_object: "True if attachment successful, False otherwise" (logged, naming
+    # the links the body has).
+    loose = box(sim)
+    with caplog.at_level(logging.WARNING):
+        assert r2d2.attach_object(loose, parent_link_index="no_such_link") is False
+    assert "no_such_link" in caplog.text and "'head'" in caplog.text
+    assert not loose.is_attached()
 
 
 @pytest.mark.parametrize(
@@ -466,15 +470,16 @@ def test_batch_spawned_bodies_can_be_picked_up_and_carry(sim):
     ],
 )
 def test_config_poses_accept_rpy_yaw_or_a_list(sim, pose, expected_yaw):
-    cfg = {"visual_shape": {"shape_type": "box", "half_extents": [0.1, 0.1, 0.1]}, "pose": pose}
+    box = {"shape_type": "box", "half_extents": [0.1, 0.1, 0.1]}
+    cfg = {"name": "box", "visual_shape": box, "pose": pose}
     obj = SimObject.from_dict(cfg, sim)
     assert obj.get_pose().position.tolist() == pytest.approx([1, 2, 0.1])
     assert obj.get_pose().yaw == pytest.approx(expected_yaw)
 
 
 def test_config_pose_rejects_two_orientations(sim):
-    cfg = {"pose": {"position": [0, 0, 0], "rpy": [0, 0, 1], "yaw": 1.0}}
+    cfg = {"name": "box", "pose": {"position": [0, 0, 0], "rpy": [0, 0, 1], "yaw": 1.0}}
     with pytest.raises(ValueError, match="give one of 'orientation', 'yaw' or 'rpy'"):
         SimObject.from_dict(cfg, sim)
     with pytest.raises(ValueError, match=r"pose\.rpy: expected 3 finite numbers"):
-        SimObject.from_dict({"pose": {"rpy": [0, 1]}}, sim)
+        SimObject.from_dict({"name": "box", "pose": {"rpy": [0, 1]}}, sim)

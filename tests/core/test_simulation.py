@@ -55,23 +55,46 @@ def test_step_phases_run_in_design_order(sim):
     ]
 
 
-def test_return_profiling_has_every_phase_and_custom_fields(sim):
+def test_return_profiling_has_the_reference_keys_and_custom_fields(sim):
+    # The reference API's step_once(return_profiling=True) keys, plus attachments (ours) and
+    # custom fields; collision_breakdown is "present only when collision ran".
     sim.register_callback(lambda s, dt: s.record_profiling("custom_logic", 1.5))
     sim.register_callback(lambda s, dt: s.record_profiling("custom_logic", 0.5))
     timings = sim.step_once(return_profiling=True)
     assert set(timings) == {
-        "events_pre_step",
-        "callbacks",
+        "phase1_update",
+        "phase2_pose_flush",
+        "phase3_aabb_grid_flush",
         "agent_update",
         "attachments",
+        "callbacks",
+        "step_simulation",
         "collision_check",
+        "collision_breakdown",
+        "events_pre_step",
         "events_post_step",
+        "events_collision",
+        "monitor_update",
         "total",
         "custom_logic",
     }
+    assert set(timings["collision_breakdown"]) == {
+        "get_aabbs",
+        "spatial_hashing",
+        "aabb_filtering",
+        "contact_points",
+        "total",
+    }
     assert timings["custom_logic"] == 2.0
-    assert timings["total"] >= timings["callbacks"] >= 0
+    assert timings["total"] >= timings["phase1_update"] >= timings["callbacks"] >= 0
+    assert timings["step_simulation"] == 0.0 and timings["phase2_pose_flush"] == 0.0
+    assert dict(sim.last_profiling) == timings
+    with pytest.raises(TypeError):
+        sim.last_profiling["total"] = 0.0  # read-only
+    sim.set_collision_check_frequency(0)
+    assert "collision_breakdown" not in sim.step_once(return_profiling=True)
     assert sim.step_once() is None
+    assert sim.last_profiling is None
 
 
 def test_physics_phase_only_with_physics():

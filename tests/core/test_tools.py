@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -25,7 +26,12 @@ from fleet_async.core.geometry.vectors import (
     body_to_world_velocity_3d,
     normalize_vector_param,
 )
-from fleet_async.core.world.links import resolve_joint_index, resolve_link_index
+from fleet_async.core.world.links import (
+    joint_index,
+    link_index,
+    resolve_joint_index,
+    resolve_link_index,
+)
 
 # ----- velocities ------------------------------------------------------------------------
 
@@ -152,10 +158,21 @@ def test_resolve_link_index_unknown_name_lists_known_links(client: int) -> None:
     kuka = p.loadURDF("kuka_iiwa/model.urdf", physicsClientId=client)
 
     with pytest.raises(ValueError, match="no link named 'gripper'") as info:
-        resolve_link_index(kuka, "gripper", physics_client_id=client)
+        link_index(kuka, "gripper", physics_client_id=client)
 
     assert "lbr_iiwa_link_0" in str(info.value)
     assert "lbr_iiwa_link_7" in str(info.value)
+
+
+def test_resolve_index_returns_minus_one_for_an_unknown_name(client: int, caplog) -> None:
+    # Seed, tools.resolve_link_index: "Returns -1 if link is "base_link" or if link name not
+    # found"; resolve_joint_index: "Returns -1 if joint name not found". Logged, with the names.
+    kuka = p.loadURDF("kuka_iiwa/model.urdf", physicsClientId=client)
+    with caplog.at_level(logging.WARNING):
+        assert resolve_link_index(kuka, "gripper", physics_client_id=client) == -1
+        assert resolve_joint_index(kuka, "elbow", physics_client_id=client) == -1
+    assert "no link named 'gripper'" in caplog.text and "lbr_iiwa_link_7" in caplog.text
+    assert "no joint named 'elbow'" in caplog.text
 
 
 def test_resolve_link_index_rejects_bad_types_and_bodies(client: int) -> None:
@@ -185,13 +202,13 @@ def test_resolve_joint_index_unknown_name_lists_known_joints(client: int) -> Non
     r2d2 = p.loadURDF("r2d2.urdf", physicsClientId=client)
 
     with pytest.raises(ValueError, match="no joint named 'elbow'") as info:
-        resolve_joint_index(r2d2, "elbow", physics_client_id=client)
+        joint_index(r2d2, "elbow", physics_client_id=client)
 
     assert "head_swivel" in str(info.value)
     assert "tobox" in str(info.value)
     # A link name is not a joint name.
     with pytest.raises(ValueError, match="no joint named 'head'"):
-        resolve_joint_index(r2d2, "head", physics_client_id=client)
+        joint_index(r2d2, "head", physics_client_id=client)
 
 
 def test_lookup_uses_the_given_client() -> None:
@@ -282,12 +299,21 @@ def test_grid_to_world_and_round_trip() -> None:
 
 
 def test_grid_2d_wrappers() -> None:
-    assert world_to_grid_2d([1.9, -0.9], [0.5, 0.3]) == [4, -3]
-    assert grid_to_world_2d([4, -3], [0.5, 0.3]) == pytest.approx([2.0, -0.9])
-    assert grid_to_world_2d([2, 3], 1.5) == pytest.approx([3.0, 4.5])
+    # Three values, as the reference implementation returns from its 2-D wrappers.
+    assert world_to_grid_2d([1.9, -0.9], [0.5, 0.3]) == [4, -3, 0]
+    assert grid_to_world_2d([4, -3], [0.5, 0.3]) == pytest.approx([2.0, -0.9, 0.0])
+    assert grid_to_world_2d([2, 3], 1.5) == pytest.approx([3.0, 4.5, 0.0])
 
 
-@pytest.mark.parametrize("spacing", [[0.0, 1.0, 1.0], [1.0, -1.0, 1.0], 0.0, [1.0, 1.0]])
+def test_grid_conversions_take_2d_input() -> None:
+    # Seed, tools.world_to_grid: "Convert world coordinates to grid indices (always 3D)".
+    assert world_to_grid([1.2, 3.7], [1, 1]) == [1, 4, 0]
+    assert grid_to_world([1, 4], [1, 1]) == [1.0, 4.0, 0.0]
+    assert grid_to_world([1, 4], [0.5, 2.0], offset=[1.0, 1.0]) == [1.5, 9.0, 0.0]
+    assert world_to_grid([1.6, 9.2], [0.5, 2.0], offset=[1.0, 1.0, 0.0]) == [1, 4, 0]
+
+
+@pytest.mark.parametrize("spacing", [[0.0, 1.0, 1.0], [1.0, -1.0, 1.0], 0.0, [1.0, 1.0, 1.0, 1.0]])
 def test_grid_rejects_bad_spacing(spacing: object) -> None:
     with pytest.raises(ValueError, match="spacing"):
         world_to_grid([0.0, 0.0, 0.0], spacing)  # type: ignore[arg-type]
@@ -295,12 +321,12 @@ def test_grid_rejects_bad_spacing(spacing: object) -> None:
 
 def test_grid_rejects_bad_vectors() -> None:
     with pytest.raises(ValueError, match="pos"):
-        world_to_grid([0.0, 0.0], [1.0, 1.0, 1.0])
+        world_to_grid([0.0], [1.0, 1.0, 1.0])
     with pytest.raises(ValueError, match="offset"):
         grid_to_world([0, 0, 0], 1.0, offset=[0.0, math.nan, 0.0])
 
 
-def test_grid_execution_visits_x_fastest_then_y_then_z() -> None:
+def test_grid_execution_visits_x_then_y_then_z_as_the_reference() -> None:
     visits: list[tuple[list[int], list[float], str]] = []
 
     def record(grid_index: list[int], world_pos: list[float], tag: str) -> None:
@@ -308,17 +334,18 @@ def test_grid_execution_visits_x_fastest_then_y_then_z() -> None:
 
     grid_execution([2, 2, 2], [1.0, 2.0, 3.0], [10.0, 0.0, 0.0], record, {"tag": "t"})
 
+    # X outermost, Z fastest: the reference implementation's order.
     assert [v[0] for v in visits] == [
         [0, 0, 0],
-        [1, 0, 0],
-        [0, 1, 0],
-        [1, 1, 0],
         [0, 0, 1],
-        [1, 0, 1],
+        [0, 1, 0],
         [0, 1, 1],
+        [1, 0, 0],
+        [1, 0, 1],
+        [1, 1, 0],
         [1, 1, 1],
     ]
-    assert visits[3][1] == [11.0, 2.0, 0.0]
+    assert visits[6][1] == [11.0, 2.0, 0.0]
     assert visits[7][1] == [11.0, 2.0, 3.0]
     assert {v[2] for v in visits} == {"t"}
 

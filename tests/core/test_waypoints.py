@@ -10,7 +10,7 @@ import pybullet as p
 import pytest
 
 from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.geometry.quaternions import quat_from_euler, rotate_vector
+from fleet_async.core.geometry.quaternions import quat_from_euler, quat_multiply, rotate_vector
 from fleet_async.core.geometry.waypoints import Path
 
 S = math.sqrt(0.5)
@@ -32,14 +32,23 @@ def heading(pose: Pose) -> np.ndarray:
     return rotate_vector([1, 0, 0], pose.orientation)
 
 
-def assert_faces_next(path: Path, closed: bool) -> None:
-    """Each waypoint's X axis points at the next one (the first, or along the last chord)."""
+def intrinsic_xyz(rpy):
+    """The plane frame of the shape constructors: intrinsic X-Y-Z (the reference's tilt)."""
+    roll, pitch, yaw = rpy
+    return quat_multiply(
+        quat_multiply(quat_from_euler(roll, 0, 0), quat_from_euler(0, pitch, 0)),
+        quat_from_euler(0, 0, yaw),
+    )
+
+
+def assert_faces_next(path: Path) -> None:
+    """Each waypoint's X axis points at the next one (the last along the last chord)."""
     pts = [wp.position for wp in path]
     for i, wp in enumerate(path):
         if i + 1 < len(pts):
             a, b = pts[i], pts[i + 1]
         else:
-            a, b = (pts[i], pts[0]) if closed else (pts[i - 1], pts[i])
+            a, b = pts[i - 1], pts[i]
         chord = (b - a) / np.linalg.norm(b - a)
         np.testing.assert_allclose(heading(wp), chord, atol=1e-12)
 
@@ -92,19 +101,22 @@ def test_from_positions_errors_name_the_index_or_orientation():
 # --- rectangles and squares -----------------------------------------------------------
 
 
-def test_rectangle_corners_are_ccw_and_not_closed():
+def test_rectangle_corners_are_ccw_and_closed():
+    # As the reference implementation: the first corner is repeated, so a patrol comes back.
     rect = Path.create_rectangle(center=[1, 2, 3], width=4.0, height=2.0)
     corners = [wp.position.tolist() for wp in rect]
-    assert corners == [[-1, 1, 3], [3, 1, 3], [3, 3, 3], [-1, 3, 3]]
+    assert corners == [[-1, 1, 3], [3, 1, 3], [3, 3, 3], [-1, 3, 3], [-1, 1, 3]]
     yaws = [wp.yaw for wp in rect]
-    np.testing.assert_allclose(yaws, [0, math.pi / 2, math.pi, -math.pi / 2], atol=1e-15)
-    assert rect.get_total_distance() == 10.0  # three sides: the loop is not closed
-    assert_faces_next(rect, closed=True)
+    np.testing.assert_allclose(
+        yaws, [0, math.pi / 2, math.pi, -math.pi / 2, -math.pi / 2], atol=1e-15
+    )
+    assert rect.get_total_distance() == 12.0  # four sides
+    assert_faces_next(rect)
 
 
 def test_rectangle_with_2d_center_sits_at_z_zero():
     rect = Path.create_rectangle(center=[5, 5], width=2.0, height=2.0)
-    assert [wp.z for wp in rect] == [0.0] * 4
+    assert [wp.z for wp in rect] == [0.0] * 5
     assert rect[0].position.tolist() == [4.0, 4.0, 0.0]
 
 
@@ -112,7 +124,7 @@ def test_tilted_rectangle_lies_in_its_plane_with_z_along_the_normal():
     rpy = [0.1, 0.2, 0.3]
     center = np.array([0.0, 0.0, 1.0])
     rect = Path.create_rectangle(center=center, width=3.0, height=2.0, rpy=rpy)
-    frame = quat_from_euler(*rpy)
+    frame = intrinsic_xyz(rpy)
     normal = rotate_vector([0, 0, 1], frame)
     for wp in rect:
         assert float((wp.position - center) @ normal) == pytest.approx(0.0, abs=1e-12)
@@ -120,13 +132,20 @@ def test_tilted_rectangle_lies_in_its_plane_with_z_along_the_normal():
     first_local = rotate_vector([-1.5, -1.0, 0.0], frame) + center
     np.testing.assert_allclose(rect[0].position, first_local, atol=1e-12)
     np.testing.assert_allclose(rect[0].orientation, frame, atol=1e-15)  # heading 0
-    assert_faces_next(rect, closed=True)
+    assert_faces_next(rect)
+
+
+def test_tilted_shapes_land_where_the_reference_puts_them():
+    # The first corner of the reference's tilted-rectangle example (measured on pybullet_fleet
+    # 0.8.0): roll, then pitch about the new Y axis.
+    rect = Path.create_rectangle(center=[0, 0, 1], width=3.0, height=2.0, rpy=[0.1, 0.2, 0])
+    np.testing.assert_allclose(rect[0].position, [-1.470, -1.025, 1.197], atol=1e-3)
 
 
 def test_square_is_rectangle_with_equal_sides():
     square = Path.create_square(center=[0, 0, 1], side_length=2.0, rpy=[0.1, 0.2, 0])
     assert square == Path.create_rectangle([0, 0, 1], 2.0, 2.0, rpy=[0.1, 0.2, 0])
-    assert len(square) == 4
+    assert len(square) == 5 and square[-1].position.tolist() == square[0].position.tolist()
 
 
 @pytest.mark.parametrize(
@@ -157,27 +176,28 @@ def test_shape_rejects_bad_center_rpy_and_side():
 # --- ellipses and circles -------------------------------------------------------------
 
 
-def test_full_ellipse_is_evenly_spaced_without_repeating_the_start():
+def test_full_ellipse_is_evenly_spaced_and_ends_at_the_start():
+    # num_points steps, num_points + 1 waypoints, as the reference implementation.
     ellipse = Path.create_ellipse(center=[1, 2, 0.5], radius_x=2.0, radius_y=1.0, num_points=8)
-    assert len(ellipse) == 8
+    assert len(ellipse) == 9
     for k, wp in enumerate(ellipse):
         a = 2 * math.pi * k / 8
         np.testing.assert_allclose(
             wp.position, [1 + 2 * math.cos(a), 2 + math.sin(a), 0.5], atol=1e-15
         )
-    assert ellipse[-1].distance_to(ellipse[0]) > 0.5
-    assert_faces_next(ellipse, closed=True)
+    assert ellipse[-1].position.tolist() == ellipse[0].position.tolist()
+    assert_faces_next(ellipse)
 
 
 def test_ellipse_arc_includes_both_ends_and_keeps_last_heading():
     arc = Path.create_ellipse(
-        center=[0, 0], radius_x=2.0, radius_y=1.0, num_points=5, start_angle=0.0, end_angle=math.pi
+        center=[0, 0], radius_x=2.0, radius_y=1.0, num_points=4, start_angle=0.0, end_angle=math.pi
     )
     assert len(arc) == 5
     np.testing.assert_allclose(arc[0].position, [2, 0, 0], atol=1e-15)
     np.testing.assert_allclose(arc[-1].position, [-2, 0, 0], atol=1e-15)
     np.testing.assert_allclose(arc[2].position, [0, 1, 0], atol=1e-15)
-    assert_faces_next(arc, closed=False)
+    assert_faces_next(arc)
     np.testing.assert_allclose(arc[-1].orientation, arc[-2].orientation, atol=1e-15)
 
 
@@ -185,29 +205,29 @@ def test_negative_span_runs_clockwise():
     loop = Path.create_circle(center=[0, 0], radius=1.0, num_points=4, end_angle=-2 * math.pi)
     positions = [wp.position.tolist() for wp in loop]
     np.testing.assert_allclose(
-        positions, [[1, 0, 0], [0, -1, 0], [-1, 0, 0], [0, 1, 0]], atol=1e-15
+        positions, [[1, 0, 0], [0, -1, 0], [-1, 0, 0], [0, 1, 0], [1, 0, 0]], atol=1e-15
     )
-    assert_faces_next(loop, closed=True)
+    assert_faces_next(loop)
 
 
 def test_tilted_circle_lies_in_plane_and_faces_along_it():
     rpy = [0.0, 0.3, 0.0]
     circle = Path.create_circle(center=[0, 0, 1], radius=1.5, num_points=12, rpy=rpy)
-    normal = rotate_vector([0, 0, 1], quat_from_euler(*rpy))
+    normal = rotate_vector([0, 0, 1], intrinsic_xyz(rpy))
     for wp in circle:
         offset = wp.position - np.array([0, 0, 1])
         assert np.linalg.norm(offset) == pytest.approx(1.5, abs=1e-12)
         assert float(offset @ normal) == pytest.approx(0.0, abs=1e-12)
         np.testing.assert_allclose(rotate_vector([0, 0, 1], wp.orientation), normal, atol=1e-12)
-    assert_faces_next(circle, closed=True)
+    assert_faces_next(circle)
 
 
 def test_circle_is_ellipse_with_equal_radii_and_polyline_length():
     circle = Path.create_circle(center=[0, 0, 0], radius=1.5)
     assert circle == Path.create_ellipse([0, 0, 0], 1.5, 1.5)
-    assert len(circle) == 16
+    assert len(circle) == 17
     chord = 2 * 1.5 * math.sin(math.pi / 16)
-    assert circle.get_total_distance() == pytest.approx(15 * chord, rel=1e-14)
+    assert circle.get_total_distance() == pytest.approx(16 * chord, rel=1e-14)
 
 
 @pytest.mark.parametrize(
@@ -215,7 +235,7 @@ def test_circle_is_ellipse_with_equal_radii_and_polyline_length():
     [
         ({"radius_x": 0.0, "radius_y": 1.0}, r"^radius_x: expected a positive"),
         ({"radius_x": 1.0, "radius_y": -1.0}, r"^radius_y: expected a positive"),
-        ({"radius_x": 1.0, "radius_y": 1.0, "num_points": 1}, r"^num_points: expected an int"),
+        ({"radius_x": 1.0, "radius_y": 1.0, "num_points": 0}, r"^num_points: expected an int"),
         ({"radius_x": 1.0, "radius_y": 1.0, "num_points": 4.0}, r"^num_points: expected an int"),
         ({"radius_x": 1.0, "radius_y": 1.0, "end_angle": 0.0}, r"^end_angle: expected a finite"),
         ({"radius_x": 1.0, "radius_y": 1.0, "end_angle": math.inf}, r"^end_angle: expected"),
@@ -306,6 +326,6 @@ def test_visualize_counts_items(client):
 
 def test_visualize_waypoints_counts_items(client):
     path = Path.create_square(center=[0, 0, 1], side_length=2.0, rpy=[0.1, 0.2, 0])
-    assert len(path.visualize_waypoints(axis_length=0.5, physics_client_id=client)) == 13
+    assert len(path.visualize_waypoints(axis_length=0.5, physics_client_id=client)) == 16
     assert path.visualize_waypoints(show_axes=False, show_points=False) == []
     assert Path([]).visualize(show_waypoints=True, physics_client_id=client) == []

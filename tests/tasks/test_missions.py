@@ -131,6 +131,7 @@ async def test_wait_and_charge(fleet_sim):
     start = fleet_sim.sim_time
     action = await agent.wait(1.2)
     assert isinstance(action, WaitAction) and fleet_sim.sim_time - start == pytest.approx(1.2)
+    agent.add_plugin(fa.BatteryPlugin(agent, {"initial_soc": 0.5}))
     await agent.charge(0.5)
     assert not agent.is_charging
 
@@ -409,3 +410,24 @@ def test_watchdog_must_be_positive(watchdog):
         with pytest.raises(ValueError, match=r"watchdog must be a positive number.*got"):
             fa.run(sim, main, watchdog=watchdog)
         assert sim.step_count == 0
+
+
+@pytest.mark.parametrize("backend", ["asyncio", "trio"])
+def test_holding_the_clock_warns_once_naming_the_culprits(backend, monkeypatch):
+    """A wall-clock wait inside a mission is allowed (it holds the clock) but gets one warning
+    that names the mission and the sim-time replacements (the threshold, a second by default,
+    is shortened here)."""
+    monkeypatch.setattr(sys.modules["fleet_async.tasks.run"], "_WARN_AFTER", 0.02)
+    with _sim() as sim:
+
+        async def main():
+            await anyio.sleep(0.3)  # wall clock: holds the sim clock meanwhile
+            await sim.sleep(0.1)
+            return sim.step_count
+
+        with pytest.warns(
+            UserWarning,
+            match=r"mission 'main' has held the simulation clock.*"
+            r"anyio\.sleep.*sim\.sleep.*fleet_async\.Event, Lock",
+        ):
+            assert fa.run(sim, main, backend=backend, watchdog=2.0) == 1

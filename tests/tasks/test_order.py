@@ -528,3 +528,95 @@ def test_primitives_are_importable_from_the_package():
     ]:
         assert name in fa.__all__ and getattr(fa, name) is not None
     assert ExceptionGroup is not None
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_failed_mission_is_announced_on_the_bus(backend):
+    with _sim() as sim:
+        seen = []
+        sim.events.on(
+            fa.SimEvents.MISSION_FAILED,
+            lambda sim, mission, error: seen.append((sim.step_count, mission, str(error))),
+        )
+
+        async def doomed():
+            await sim.sleep(0.2)
+            raise KeyError("lost pallet")
+
+        async def main():
+            async with sim.task_group() as tg:
+                tg.start_soon(doomed, name="doomed")
+                tg.start_soon(sim.sleep, 5.0)  # cancelled: not a failure
+
+        with pytest.raises(KeyError):
+            fa.run(sim, main, backend=backend)
+        assert seen == [
+            (2, "doomed", "'lost pallet'"),
+            (2, "main", "errors in a sim task group (1 sub-exception)"),  # it fails too
+        ]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_store_serves_one_waiting_get_per_turn_as_simpy(backend):
+    """Two getters wait; two items arrive in one step: the second getter is served when the
+    second put is processed, after what the producer scheduled in between (SimPy's Store)."""
+    import simpy
+
+    def simpy_log():
+        env, log = simpy.Environment(), []
+        store = simpy.Store(env)
+
+        def getter(name):
+            log.append((env.now, name, (yield store.get())))
+
+        def producer():
+            yield env.timeout(1)
+            put = store.put("a")
+            store.put("b")
+            yield put
+            yield env.timeout(0)
+            log.append((env.now, "producer", "after timeout(0)"))
+
+        for process in (getter("g1"), getter("g2"), producer()):
+            env.process(process)
+        env.run()
+        return log
+
+    with _sim(dt=1.0) as sim:
+        log = []
+        store = fa.Store(sim)
+
+        async def getter(name):
+            log.append((sim.now, name, await store.get()))
+
+        async def producer():
+            await sim.timeout(1)
+            put = store.put("a")
+            store.put("b")
+            await put
+            await sim.timeout(0)
+            log.append((sim.now, "producer", "after timeout(0)"))
+
+        async def main():
+            for mission in (getter("g1"), getter("g2"), producer()):
+                sim.spawn(mission)
+
+        fa.run(sim, main, backend=backend)
+        assert log == simpy_log()
+
+
+async def test_two_missions_can_wait_on_one_action(fleet_sim):
+    robot = _robot(fleet_sim)
+    first = robot.wait(1.0)
+    second = fleet_sim.mission_runtime.wait_action(robot, first.action)
+    assert second is first
+    ended = []
+
+    async def watcher():
+        await second
+        ended.append(fleet_sim.step_count)
+
+    watching = fleet_sim.spawn(watcher)
+    await first
+    await watching
+    assert ended == [10] and fleet_sim.step_count == 10

@@ -12,7 +12,7 @@ async def test_robot_arrives(fleet_sim):
     pose = Pose.from_xyz(0, 0, 0.1)
     robot = Agent.from_mesh(box, box, pose, sim_core=fleet_sim, controller="omni")
     await robot.move(Pose.from_xyz(2, 0, 0.1))
-    assert fleet_sim.step_count == 13
+    assert fleet_sim.step_count == 14  # 2 m: 1.4 s at 2 m/s, 5 m/s^2
 
 
 def test_an_unfinished_test_mission_fails(pytester):

@@ -1,5 +1,7 @@
 """Every name the seed documents, with its signature: present? same parameters as the seed?"""
 
+# PARITY_NO_PLAIN_RENAME: this script parses the seed's pybullet_fleet.<module> headings.
+
 import dataclasses
 import enum
 import importlib

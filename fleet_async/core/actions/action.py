@@ -8,10 +8,15 @@ Timing: actions start in the step's action tick (before motion), at that step's 
 action that completes because motion ended completes at the end of that step (sim time + dt),
 when the robot is at its goal; the next queued action starts in the following step's tick, at
 that same instant.
+
+Called directly (``while not a.is_complete(): a.execute(agent, dt)``, the reference API's
+protocol), every built-in action keeps its own ``status``, ``start_time`` and ``end_time``
+(:class:`TrackedAction`), and a WaitAction outside a queue counts the ``dt`` it is given.
 """
 
 from __future__ import annotations
 
+import logging
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -31,9 +36,12 @@ __all__ = [
     "DEFAULT_MOVE_SKIP_THRESHOLD",
     "Action",
     "MoveAction",
+    "TrackedAction",
     "WaitAction",
     "WaitHint",
 ]
+
+logger = logging.getLogger(__name__)
 
 DEFAULT_MOVE_SKIP_THRESHOLD: float = 0.05
 """m: a pick/drop sub-move shorter than this is skipped."""
@@ -53,17 +61,26 @@ WaitHint = tuple[str, float | None]
 class Action(ABC):
     """Base class of all actions.
 
+    A subclass implements ``execute(agent, dt)`` (one timestep; True once complete) and
+    ``reset()``. Run from an agent's queue, the queue keeps ``status`` and the times; a
+    subclass may also set them itself, as the built-in actions do (:class:`TrackedAction`).
+
     Attributes:
         status: Execution status.
         start_time: Sim time the action started, or None.
         end_time: Sim time the action ended, or None.
         error_message: Why it failed or was cancelled, or None.
+        awaited: Set by the mission API (``agent.submit`` and the commands built on it) on the
+            actions a mission awaits. An awaited MoveAction on a fixed-base agent fails with
+            the reason, so the mission sees it; a plain queued one is skipped with a warning,
+            as the reference API ignores goals on a fixed base.
     """
 
     status: ActionStatus = field(default=ActionStatus.NOT_STARTED, init=False)
     start_time: float | None = field(default=None, init=False)
     end_time: float | None = field(default=None, init=False)
     error_message: str | None = field(default=None, init=False)
+    awaited: bool = field(default=False, init=False, repr=False)
     _cancel_hook: Callable[[Action], None] | None = field(default=None, init=False, repr=False)
 
     @abstractmethod
@@ -124,6 +141,39 @@ class Action(ABC):
         self.error_message = None
 
 
+def _clock(agent: Agent) -> float:
+    """The sim time an action run directly reads (0.0 for an agent outside a simulation)."""
+    sim = agent.sim_core
+    return 0.0 if sim is None else sim.sim_time
+
+
+class TrackedAction(Action):
+    """An action that keeps its own status and times, so it can be run without a queue.
+
+    ``execute`` marks the action IN_PROGRESS (with ``start_time``) on its first call, runs
+    :meth:`step`, and once that returns True marks it COMPLETED (unless it failed) with
+    ``end_time``. From a queue nothing changes: the queue has set the start already and
+    stamps the exact end time afterwards.
+    """
+
+    def execute(self, agent: Agent, dt: float) -> bool:
+        """Run one timestep of ``dt`` seconds; True once the action is complete."""
+        if self.status is ActionStatus.NOT_STARTED:
+            self.status = ActionStatus.IN_PROGRESS
+            self.start_time = _clock(agent)
+        if not self.step(agent, dt):
+            return False
+        if self.status is ActionStatus.IN_PROGRESS:
+            self.status = ActionStatus.COMPLETED
+        if self.end_time is None:
+            self.end_time = _clock(agent)
+        return True
+
+    @abstractmethod
+    def step(self, agent: Agent, dt: float) -> bool:
+        """The action's own work for one timestep; True once it is done (or :meth:`fail`)."""
+
+
 def _as_path(path: Any) -> Path:
     if isinstance(path, Path):
         return path
@@ -135,7 +185,7 @@ def _as_path(path: Any) -> Path:
 
 
 @dataclass(eq=False)
-class MoveAction(Action):
+class MoveAction(TrackedAction):
     """Follow a path.
 
     Args:
@@ -158,11 +208,18 @@ class MoveAction(Action):
             raise ValueError("MoveAction.path: expected at least one waypoint, got an empty path")
         self.direction = coerce_enum(MovementDirection, self.direction, "MoveAction.direction")
 
-    def execute(self, agent: Agent, dt: float) -> bool:
-        """Send the path on the first call; complete when motion ends at the goal."""
+    def step(self, agent: Agent, dt: float) -> bool:
+        """Send the path on the first call; complete when motion ends at the goal.
+
+        On a fixed-base agent the move is skipped with a warning (it completes at once), unless
+        a mission awaits it (:attr:`awaited`): then it fails with the reason.
+        """
         if not self._started:
             self._started = True
             blocker = agent.motion_blocker
+            if blocker is not None and agent.use_fixed_base and not self.awaited:
+                logger.warning("MoveAction skipped: %s; goals are ignored", blocker)
+                return True
             if blocker is not None:
                 return self.fail(f"cannot move: {blocker}")
             agent.set_path(
@@ -192,8 +249,12 @@ class MoveAction(Action):
 
 
 @dataclass(eq=False)
-class WaitAction(Action):
+class WaitAction(TrackedAction):
     """Wait ``duration`` sim seconds; ``action_type="charge"`` charges the battery meanwhile.
+
+    From a queue the wait ends at the exact sim time it covers. Called directly, each
+    ``execute(agent, dt)`` counts as ``dt`` seconds: a 1.0 s wait completes on the 10th call
+    with ``dt = 0.1``.
 
     Args:
         duration: Seconds (>= 0).
@@ -203,6 +264,7 @@ class WaitAction(Action):
     duration: float = 0.0
     action_type: str = "idle"
     _until: float | None = field(default=None, init=False, repr=False)
+    _elapsed: float = field(default=0.0, init=False, repr=False)
 
     def __post_init__(self) -> None:
         d = self.duration
@@ -215,12 +277,16 @@ class WaitAction(Action):
             raise ValueError(f"WaitAction.duration: expected a finite number >= 0 (s), got {d!r}")
         self.duration = float(d)
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: Agent, dt: float) -> bool:
         """Start the timer on the first call; complete once it has run out."""
         sim = agent.sim_core
-        now = sim.fleet.actions.now if sim is not None else 0.0
+        if self.in_queue and sim is not None:  # the queue's clock: exact sim times
+            now = sim.fleet.actions.now
+        else:  # run directly: the caller's dt is the time that passes per call
+            self._elapsed += dt
+            now = self._elapsed
         if self._until is None:
-            self._until = now + self.duration
+            self._until = (now if self.in_queue else 0.0) + self.duration
             if self.action_type == "charge":
                 agent.set_charging(True)
         if now + 1e-9 < self._until:
@@ -242,3 +308,4 @@ class WaitAction(Action):
         """Forget progress."""
         self._reset_status()
         self._until = None
+        self._elapsed = 0.0

@@ -266,6 +266,12 @@ class ActionQueue:
         self._emit(SimEvents.ACTION_FAILED, agent, action)
 
     def _emit(self, event: str, agent: Agent, action: Action) -> None:
-        self._sim.events.emit(event, agent=agent, action=action)
+        if event == SimEvents.ACTION_STARTED:
+            self._sim.events.emit(event, agent=agent, action=action)
+            if agent.has_event_bus():
+                agent.events.emit(event, agent=agent, action=action)
+            return
+        status = action.status
+        self._sim.events.emit(event, agent=agent, action=action, status=status)
         if agent.has_event_bus():
-            agent.events.emit(event, agent=agent, action=action)
+            agent.events.emit(event, agent=agent, action=action, status=status)

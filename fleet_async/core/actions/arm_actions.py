@@ -17,7 +17,7 @@ import numpy as np
 from fleet_async.core.actions.action import (
     DEFAULT_EE_TOLERANCE,
     DEFAULT_MAX_FORCE,
-    Action,
+    TrackedAction,
     WaitHint,
 )
 
@@ -32,7 +32,7 @@ def _check_force(owner: str, value: Any) -> None:
         raise ValueError(f"{owner}.max_force: expected a number >= 0 (N), got {value!r}")
 
 
-class _ArmAction(Action):
+class _ArmAction(TrackedAction):
     """What arm actions share: woken when the joints move; cancelling holds the joints."""
 
     _polled: bool = False  # physics joints: checked every step (motors settle asymptotically)
@@ -73,7 +73,7 @@ class JointAction(_ArmAction):
             raise ValueError("JointAction.target_joint_positions: expected at least one target")
         _check_force("JointAction", self.max_force)
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: Agent, dt: float) -> bool:
         """Command the targets on the first call; complete once the joints are within tolerance."""
         if self._targets is None:
             if agent.get_num_joints() == 0:
@@ -139,7 +139,7 @@ class PoseAction(_ArmAction):
             raise ValueError(f"PoseAction.tolerance: expected a number > 0 (m), got {tol!r}")
         _check_force("PoseAction", self.max_force)
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: Agent, dt: float) -> bool:
         """Solve and command on the first call; judge the pose once the joints settle."""
         if not self._started:
             self._started = True

@@ -1,10 +1,10 @@
 """PickAction and DropAction, built on one shared approach / act / retreat sequence.
 
-Both actions run the same stages: drive to an approach pose ``approach_offset`` metres short
-of the target (facing it), drive in to ``pick_offset`` / ``drop_offset`` from it, attach or
-detach, and back out to the approach pose. A sub-move shorter than ``move_skip_threshold`` is
-skipped. Only what differs lives in the subclasses: which object is the target, and what
-"act" does.
+Both actions run the same stages: drive to an approach pose ``approach_offset`` metres from
+the target (facing it), drive to ``pick_offset`` / ``drop_offset`` from it, attach or detach,
+and back out to the approach pose. A sub-move shorter than ``move_skip_threshold`` is skipped,
+and so are all of them on a fixed-base agent (its goals are ignored). Only what differs lives
+in the subclasses: which object is the target, and what "act" does.
 
 With ``joint_targets`` or ``ee_target_position`` the act is done by an arm: the joints reach
 (the given targets, or an IK solution for the end-effector target), the object is attached to
@@ -26,7 +26,7 @@ from fleet_async.core.actions.action import (
     DEFAULT_EE_TOLERANCE,
     DEFAULT_MAX_FORCE,
     DEFAULT_MOVE_SKIP_THRESHOLD,
-    Action,
+    TrackedAction,
     WaitHint,
 )
 from fleet_async.core.actions.arm_actions import format_position
@@ -46,11 +46,25 @@ logger = logging.getLogger(__name__)
 _Stage = tuple[Any, ...]
 
 
-class _ApproachAction(Action):
+class _ApproachAction(TrackedAction):
     """Shared machinery of pick and drop: a queue of move / act stages.
 
     Subclasses are dataclasses that declare the fields (in the reference API's order) and set
-    the class variables below; this class holds only behaviour.
+    the class variables below; this class holds only behaviour. Fields both actions have:
+
+    Args:
+        use_approach: Drive to the approach pose first.
+        approach_pose: The approach pose; None computes it ``approach_offset`` short.
+        approach_offset: m short of the target where the approach pose is.
+        joint_targets: Arm: joint positions to reach with (a list, or {joint name: position}).
+        joint_tolerance: Arm: rad (or m) within which a joint has arrived.
+        joint_max_force: Arm: N (or N m) of the joint motors with physics.
+        ee_target_position: Arm: [x, y, z] for the end effector, reached through IK.
+        ee_target_orientation: Arm: [qx, qy, qz, qw] for the end effector, or None.
+        ee_end_effector_link: Arm: link index or name of the end effector (None: found).
+        ee_tolerance: Arm: m within which the end effector has arrived.
+        continue_on_ik_failure: Go on with the best IK solution when the target is out of
+            reach (else the action fails).
     """
 
     _phases: ClassVar[type[Enum]] = PickPhase
@@ -101,8 +115,9 @@ class _ApproachAction(Action):
         target = self._target_position(agent)
         if isinstance(target, str):
             return target
-        # An arm on a base that cannot move reaches from where it stands.
-        drives = not (uses_arm and agent.motion_blocker is not None)
+        # An arm on a base that cannot move, and any fixed-base agent (whose goals are
+        # ignored), acts from where it stands.
+        drives = agent.motion_blocker is None or not (uses_arm or agent.use_fixed_base)
         here = agent.get_pose().position
         offset = float(getattr(self, self._in_offset_field))
         inner = calculate_offset_pose(target, here, offset, keep_height=True)
@@ -111,8 +126,9 @@ class _ApproachAction(Action):
         stages: deque[_Stage] = deque()
         approach = None
         if self.use_approach and drives:
+            # approach_offset is the approach pose's distance from the target itself.
             approach = self.approach_pose or calculate_offset_pose(
-                target, here, offset + float(self.approach_offset), keep_height=True
+                target, here, float(self.approach_offset), keep_height=True
             )
             stages.append(("move", approach, phases["APPROACHING"], MovementDirection.FORWARD))
         if drives:
@@ -172,7 +188,7 @@ class _ApproachAction(Action):
         self._arm_targets = None
         return True
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: Agent, dt: float) -> bool:
         """Run stages until one has to wait for motion, or all are done."""
         if self._stages is None:
             planned = self._plan(agent)
@@ -257,7 +273,6 @@ class PickAction(_ApproachAction):
             ``search_radius`` of this [x, y, z] (XY distance when ``use_2d_search``).
         search_radius: m.
         use_2d_search: Ignore height when searching.
-        use_approach / approach_pose / approach_offset: The approach stage (see module doc).
         pick_offset: m from the object where the robot stops to pick.
         move_skip_threshold: m; shorter sub-moves are skipped.
         attach_link: Robot link index or name (-1 / "base_link": the base).
@@ -365,7 +380,6 @@ class DropAction(_ApproachAction):
 
     Args:
         drop_pose: Where the object goes (the robot drives there, ``drop_offset`` short).
-        use_approach / approach_pose / approach_offset: The approach stage.
         drop_offset: m from ``drop_pose`` where the robot stops.
         move_skip_threshold: m; shorter sub-moves are skipped.
         place_gently: Place exactly at ``drop_pose``; else release ``drop_height`` above it.

@@ -307,6 +307,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     # ----- actions ------------------------------------------------------------------------
 
     def _queue(self) -> Any:
+        self.check_not_removed("actions")
         if self.sim_core is None:
             raise ValueError(f"actions need a simulation; {self!r} is not part of one")
         return self.sim_core.fleet.actions

@@ -21,7 +21,7 @@ import numpy as np
 from fleet_async.core.actions.action import DEFAULT_EE_TOLERANCE, DEFAULT_MAX_FORCE
 from fleet_async.core.motion.ik import IKParams, detect_end_effector, orientation_error, solve_ik
 from fleet_async.core.motion.joints import JointSet, ToleranceSpec, read_joint_infos
-from fleet_async.core.world.links import resolve_link_index
+from fleet_async.core.world.links import link_index
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -288,7 +288,7 @@ class AgentJointsApi:
         joints = self.joints
         if end_effector_link is None:
             return detect_end_effector(joints)
-        link = resolve_link_index(self.body_id, end_effector_link, physics_client_id=joints.client)
+        link = link_index(self.body_id, end_effector_link, physics_client_id=joints.client)
         if link < 0:
             raise ValueError(f"{self!r}: the end effector must be a link, not the base")
         return link

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import logging
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -30,6 +30,7 @@ from fleet_async.core.motion.controllers import (
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.motion.joints import JointSet
     from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.core.world.state import KinematicState
 
@@ -56,6 +57,7 @@ class AgentMotionApi:
 
     # Provided by Agent / SimObject.
     sim_core: MultiRobotSimulationCore | None
+    check_not_removed: Callable[[str], None]  # SimObject's: raises once the agent left its sim
     use_fixed_base: bool
     motion_result: bool | None
     path_visualize: bool
@@ -65,6 +67,7 @@ class AgentMotionApi:
     _slot: int
     _store: KinematicState
     _row: int
+    _joint_set: JointSet | None
 
     @property
     def _agent(self) -> Agent:
@@ -229,6 +232,7 @@ class AgentMotionApi:
         return None
 
     def _base(self, what: str) -> KinematicController | None:
+        self.check_not_removed(what)
         if self.use_fixed_base:
             logger.warning("%s ignored: %r has a fixed base", what, self)
             return None
@@ -358,6 +362,32 @@ class AgentMotionApi:
             if isinstance(base, KinematicController) and self.sim_core
             else 0
         )
+
+    def update(self, dt: float) -> None:
+        """Advance this agent alone by ``dt`` seconds, outside the step loop.
+
+        For a custom loop (the reference API's ``agent.update(dt)``): high-level controllers,
+        the base motion toward the goal within the limits, and kinematic joints. Inside
+        ``step_once`` the simulation has already moved every agent in its vectorised pass, so
+        a subclass's ``update`` that calls ``super().update(dt)`` moves nothing twice. Does
+        nothing on a fixed base (it has no goal) or outside a simulation. The action queue
+        advances only in ``step_once``.
+        """
+        sim = self.sim_core
+        if sim is None or sim.in_step:
+            return
+        if self.has_stepped_controllers():
+            self.step_controllers(dt)
+        if self._slot >= 0:
+            sim.fleet.engine.advance_slot(self._slot, dt)
+            sim.world.on_pose_written(self._agent, True)
+        joints = self._joint_set
+        if joints is not None and joints.kinematic and joints.moving:
+            joints.advance(dt)
+
+    def overrides_update(self) -> bool:
+        """Whether a subclass overrides ``update`` (the simulation then calls it every step)."""
+        return type(self).update is not AgentMotionApi.update
 
     def note_motion_end(self, reached: bool) -> None:
         """Record how the last motion ended (called by the simulation)."""

@@ -4,7 +4,7 @@ solver in ``motion/ik.py`` and is re-exported here)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from fleet_async.core.base.config_utils import dataclass_from_dict
 from fleet_async.core.base.types import MotionMode, coerce_enum
@@ -38,6 +38,7 @@ class AgentSpawnParams(SimObjectSpawnParams):
     ik_params: IKParams | None = None
     controller: Any = None
     plugins: list[dict[str, Any]] | None = None
+    name_required_in_config: ClassVar[bool] = False  # the reference's agent configs have none
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -93,7 +93,8 @@ class FleetMotion:
         self.actions.tick(self._sim.sim_time, dt)
         for agent in tuple(self._controlled.values()):
             agent.step_controllers(dt)
-        self.engine.advance(dt)
+        if not self.engine.is_idle():  # an idle fleet's step costs no array work
+            self.engine.advance(dt)
         for agent in tuple(self._plugged.values()):
             agent.step_plugins(dt)
         # Last: a wait that ends with this step has covered all of it (a charge charged).

@@ -2,8 +2,10 @@
 
 A periodic entry with frequency ``f`` runs at sim times ``1/f, 2/f, 3/f, ...`` (the first call
 one period after the start, never at t = 0), computed as multiples of the period so that no
-float error accumulates. An entry with frequency None runs on every call to :meth:`due`.
-When the step is coarser than the period an entry runs once per step, with the elapsed time.
+float error accumulates. An entry added later (at sim time ``now``) first runs at the next
+multiple after ``now``, and its first ``dt`` is the time since it was added. An entry with
+frequency None runs on every call to :meth:`due`. When the step is coarser than the period an
+entry runs once per step, with the elapsed time.
 """
 
 from __future__ import annotations
@@ -44,8 +46,9 @@ class PeriodicSchedule:
         callback: Callable[..., Any],
         frequency: float | None,
         owner: str = "register_callback",
+        now: float = 0.0,
     ) -> None:
-        """Add ``callback`` at ``frequency`` Hz (None: every step).
+        """Add ``callback`` at ``frequency`` Hz (None: every step), at sim time ``now``.
 
         Raises:
             TypeError: if ``callback`` is not callable.
@@ -64,7 +67,8 @@ class PeriodicSchedule:
                     f"{owner}: frequency must be None or a number > 0 (Hz), got {frequency!r}"
                 )
             period = 1.0 / float(frequency)
-        self._entries.append(_Entry(callback, period))
+        served = 0 if period is None else math.floor((now + _EPS) / period)
+        self._entries.append(_Entry(callback, period, served, now))
 
     def remove(self, callback: Callable[..., Any]) -> bool:
         """Remove the first entry for ``callback``; return whether there was one."""

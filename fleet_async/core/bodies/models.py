@@ -40,7 +40,7 @@ PROJECT_ROBOTS_DIR: str = str(FsPath(__file__).resolve().parents[2] / "data" / "
 
 _PROJECT_MODELS: dict[str, str] = {
     name: f"{name}.urdf"
-    for name in ("simple_cube", "mobile_robot", "arm_robot", "mobile_manipulator")
+    for name in ("simple_cube", "mobile_robot", "arm_robot", "mobile_manipulator", "rail_arm_robot")
 }
 """Project model name -> file relative to ``PROJECT_ROBOTS_DIR``."""
 

@@ -1,14 +1,18 @@
 """SimObject: a handle onto one row of the simulation's state store.
 
 A SimObject owns no pose of its own: ``get_pose`` reads the store, ``set_pose`` writes it and
-marks the row dirty. An object created without a simulation keeps a private one-row store and
-talks to PyBullet client 0 directly, until ``sim.add_object`` adopts it.
+marks the row dirty. An object created without a simulation keeps its own pose and what it
+carries (``standalone.py``), talking to PyBullet client 0 directly, until ``sim.add_object``
+adopts it.
+
+A STATIC object "never moves" (the reference API's CollisionMode): ``set_pose`` refuses it with
+a warning and returns False, until ``set_collision_mode`` makes it movable.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import numpy as np
 import pybullet as p
@@ -18,7 +22,10 @@ from fleet_async.core.base.logging_utils import NamedLazyLogger
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.base.types import CollisionMode, coerce_enum
 from fleet_async.core.bodies.constructors import SimObjectConstructors
+from fleet_async.core.bodies.object_callbacks import ObjectCallbacks
+from fleet_async.core.bodies.removal import ObjectRemovedError, RemovedState, removed_message
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.bodies.standalone import StandaloneState, read_standalone_mass
 from fleet_async.core.geometry.approach import find_nearest
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.vectors import as_orientation, as_position
@@ -29,10 +36,10 @@ from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["ShapeParams", "SimObject", "SimObjectSpawnParams"]
+__all__ = ["ObjectRemovedError", "ShapeParams", "SimObject", "SimObjectSpawnParams"]
 
 
-class SimObject(SimObjectConstructors):
+class SimObject(ObjectCallbacks, SimObjectConstructors):
     """A body in the simulation: robot, pallet, shelf or marker.
 
     Args:
@@ -47,13 +54,8 @@ class SimObject(SimObjectConstructors):
             their own state is ready).
 
     Attributes:
-        object_id: Unique id assigned by the simulation (-1 while standalone).
-        name: Human-readable name.
-        body_id: PyBullet body id.
-        mass: kg.
-        pickable: Whether it can be picked.
-        user_data: Free-form metadata.
-        sim_core: The simulation it belongs to, or None.
+        object_id: Unique id assigned by the simulation (-1 while standalone); ``name``,
+            ``body_id``, ``mass``, ``pickable``, ``user_data`` and ``sim_core`` as given.
     """
 
     _spawn_params_cls: ClassVar[type[SimObjectSpawnParams]] = SimObjectSpawnParams
@@ -86,21 +88,18 @@ class SimObject(SimObjectConstructors):
         self.sim_core: MultiRobotSimulationCore | None = None
         self._collision_mode = coerce_enum(CollisionMode, collision_mode, "collision_mode")
         self._events: EventBus | None = None
-        self._callbacks: PeriodicSchedule | None = None  # made on first registration
+        self._callbacks = PeriodicSchedule()
         self._row = -1  # no row until bound to a simulation or given a standalone store
+        self._removed: str | None = None  # why using the object fails once it left its sim
+        self._solo: StandaloneState | None = None
         if sim_core is not None:
-            self.mass = float(mass) if mass is not None else sim_core.body_mass(self.body_id)
+            # mass=None: the body's own masses, every link summed (what a URDF says).
+            self.mass = float(mass) if mass is not None else sim_core.body_total_mass(body_id)
             if register:  # subclasses that finish their own setup first pass False and add later
                 sim_core.add_object(self)
         else:
-            self.mass = float(mass) if mass is not None else self._standalone_mass()
-            self._store = KinematicState(1)
-            self._row = self._store.allocate(
-                -1,
-                self.body_id,
-                *self._standalone_pose(),
-                collision_code=COLLISION_CODES[self._collision_mode.value],
-            )
+            self.mass = float(mass) if mass is not None else read_standalone_mass(self.body_id)
+            self._go_standalone(None)
 
     def __repr__(self) -> str:
         return (
@@ -146,6 +145,8 @@ class SimObject(SimObjectConstructors):
         self.sim_core = sim
         self._store = store
         self._row = row
+        self._solo = None
+        self._removed = None
         self.object_id = object_id
         if self._logger is not None:
             self._refresh_log_prefix()
@@ -154,18 +155,27 @@ class SimObject(SimObjectConstructors):
         """Called by the simulation just before the object leaves it (subclass hook)."""
 
     def unbind(self) -> None:
-        """Leave the simulation, keeping the last pose in a private row."""
-        pos, orn = self._store.position[self._row].copy(), self._store.orientation[self._row].copy()
-        self._store = KinematicState(1)
-        self._row = self._store.allocate(
-            -1, self.body_id, pos, orn, collision_code=COLLISION_CODES[self._collision_mode.value]
-        )
-        self.sim_core = None
-        self.object_id = -1
+        """Leave the simulation; from now on using the object raises ObjectRemovedError."""
         if self._body_id == PENDING_BODY:
             self._body_id = -1  # left before its body was made: it never will be
-        if self._logger is not None:
-            self._refresh_log_prefix()
+        self._removed = removed_message(self, self.sim_core)
+        self._store = cast("KinematicState", RemovedState(self._removed))
+        self._row = self.object_id = -1
+        self.sim_core = None
+
+    def check_not_removed(self, what: str) -> None:
+        """Raise ObjectRemovedError (naming the object and ``what``) if it left its sim."""
+        if self._removed is not None:
+            raise ObjectRemovedError(f"{what}: {self._removed}")
+
+    def _go_standalone(self, pose: tuple[Sequence[float], Sequence[float]] | None) -> None:
+        self._solo = StandaloneState(self, COLLISION_CODES[self._collision_mode.value], pose)
+        self._store, self._row = self._solo.store, self._solo.row
+
+    @property
+    def standalone_state(self) -> StandaloneState | None:
+        """Pose and attachments kept while outside a simulation (None inside one)."""
+        return self._solo
 
     @property
     def state_row(self) -> int:
@@ -177,25 +187,20 @@ class SimObject(SimObjectConstructors):
     def set_name(self, name: str | None) -> None:
         """Rename the object and refresh its log prefix."""
         self.name = name
-        if self._logger is not None:
-            self._refresh_log_prefix()
-
-    @property
-    def _log(self) -> NamedLazyLogger:
-        """This object's logger (made on first use: most objects never log)."""
-        if self._logger is None:
-            self._logger = NamedLazyLogger(__name__)
-            self._refresh_log_prefix()
-        return self._logger
+        self._refresh_log_prefix()
 
     @property
     def events(self) -> EventBus:
         """Per-entity event bus, created on first access."""
         if self._events is None:
-            self._events = EventBus()
+            self._events = EventBus(on_change=self._on_handlers_changed)
             if self.sim_core is not None:
                 self.sim_core.world.on_event_bus_created()
         return self._events
+
+    def _on_handlers_changed(self, event: str) -> None:
+        if self.sim_core is not None:
+            self.sim_core.world.on_entity_handlers_changed(self)
 
     def has_event_bus(self) -> bool:
         """Whether anyone has asked for this object's bus yet (emitters skip it otherwise)."""
@@ -210,6 +215,15 @@ class SimObject(SimObjectConstructors):
     def is_static(self) -> bool:
         """Whether the object is STATIC (never moves)."""
         return self._collision_mode is CollisionMode.STATIC
+
+    @property
+    def is_kinematic(self) -> bool:
+        """Whether the object is massless (``mass == 0``), as the reference implementation says.
+
+        A massless body is only ever moved by the simulator. With physics off every body is
+        moved that way, whatever its mass.
+        """
+        return self.mass == 0.0
 
     def set_collision_mode(self, mode: CollisionMode | str) -> None:
         """Change the collision mode; DISABLED also turns off PyBullet contacts."""
@@ -233,7 +247,8 @@ class SimObject(SimObjectConstructors):
         """Move the object (and everything attached to it) to ``pose``.
 
         Returns:
-            True if the pose changed, False if it already was ``pose``.
+            True if the pose changed; False if it already was ``pose``, or (with a warning) if
+            the object is STATIC: change its collision mode first to move it.
         """
         if not isinstance(pose, Pose):
             raise TypeError(f"set_pose: expected a Pose, got {pose!r}")
@@ -258,14 +273,20 @@ class SimObject(SimObjectConstructors):
         store, row = self._store, self._row
         if np.array_equal(store.position[row], pos) and np.array_equal(store.orientation[row], orn):
             return False
+        if self._collision_mode is CollisionMode.STATIC:
+            self._log.warning(
+                "set_pose refused: a STATIC object never moves; "
+                "call set_collision_mode(...) first to move it"
+            )
+            return False
+        if self._solo is not None:
+            self._solo.write_pose(pos, orn)
+            return True
         store.position[row] = pos
         store.orientation[row] = orn
         store.mark_moved(row)
         if self.sim_core is not None:
             self.sim_core.world.on_pose_written(self, preserve_velocity)
-        elif self.body_id >= 0:
-            p.resetBasePositionAndOrientation(self.body_id, pos.tolist(), orn.tolist())
-            store.dirty[row] = False
         return True
 
     # ----- attachments --------------------------------------------------------------------
@@ -287,16 +308,32 @@ class SimObject(SimObjectConstructors):
             joint_type: Only ``pybullet.JOINT_FIXED`` is supported.
             keep_world_pose: Compute ``relative_pose`` so the child stays where it is.
 
+        Works inside a simulation and outside one (both objects without a simulation; see
+        ``standalone.py``).
+
         Returns:
-            True once attached.
+            True once attached; False (with a warning naming the body's links) for a link name
+            this object does not have.
 
         Raises:
             ValueError: attaching to itself, an object already attached (to this or another
-                parent), a cycle, objects of different simulations, an unknown link, both
-                ``relative_pose`` and ``keep_world_pose``, or an unsupported ``joint_type``.
+                parent), a cycle, objects of different simulations, a link index out of range,
+                both ``relative_pose`` and ``keep_world_pose``, or an unsupported
+                ``joint_type``.
         """
+        if joint_type != p.JOINT_FIXED:
+            raise ValueError(
+                f"attach_object: joint_type {joint_type!r} is not supported; "
+                "only pybullet.JOINT_FIXED (4) is"
+            )
+        if self._solo is not None:
+            if obj.sim_core is not None:
+                raise ValueError(
+                    f"attach_object: {obj!r} is part of a simulation and {self!r} is not"
+                )
+            return self._solo.attach(obj, parent_link_index, relative_pose, keep_world_pose)
         return self._require_sim("attach_object").world.attach(
-            self, obj, parent_link_index, relative_pose, joint_type, keep_world_pose
+            self, obj, parent_link_index, relative_pose, keep_world_pose
         )
 
     def detach_object(
@@ -310,13 +347,17 @@ class SimObject(SimObjectConstructors):
         Raises:
             ValueError: if both ``drop_pose`` and ``drop_relative_pose`` are given.
         """
+        if self._solo is not None:
+            return self._solo.detach(obj, drop_pose, drop_relative_pose)
         return self._require_sim("detach_object").world.detach(
             self, obj, drop_pose, drop_relative_pose
         )
 
     def get_attached_objects(self) -> list[SimObject]:
         """Objects attached to this one, in attachment order."""
-        return [] if self.sim_core is None else self.sim_core.attachments.children_of(self)
+        if self._solo is not None:
+            return self._solo.children()
+        return self._require_sim("get_attached_objects").attachments.children_of(self)
 
     @property
     def attached_objects(self) -> list[SimObject]:
@@ -325,10 +366,12 @@ class SimObject(SimObjectConstructors):
 
     def is_attached(self) -> bool:
         """Whether this object is carried by another."""
-        return self.sim_core is not None and self.sim_core.attachments.of_child(self) is not None
+        return self.get_attached_parent() is not None
 
     def get_attached_parent(self) -> SimObject | None:
         """The object carrying this one, or None."""
+        if self._solo is not None:
+            return self._solo.parent()
         att = None if self.sim_core is None else self.sim_core.attachments.of_child(self)
         return None if att is None else att.parent
 
@@ -354,70 +397,22 @@ class SimObject(SimObjectConstructors):
         every step; objects that do not cost nothing)."""
         return type(self).update is not SimObject.update
 
-    def register_callback(
-        self, callback: Callable[[SimObject, float], Any], frequency: float = 0.25
-    ) -> None:
-        """Call ``callback(obj, dt)`` every ``1 / frequency`` seconds of sim time.
-
-        Raises:
-            ValueError: if ``frequency`` is not a number > 0.
-        """
-        if self._callbacks is None:
-            self._callbacks = PeriodicSchedule()
-        self._callbacks.add(callback, frequency, owner=f"{self!r}.register_callback")
-        if self.sim_core is not None:
-            self.sim_core.world.on_object_callbacks_changed(self)
-
-    def unregister_callback(self, callback: Callable[..., Any]) -> bool:
-        """Remove a callback; return whether it was registered."""
-        return self._callbacks is not None and self._callbacks.remove(callback)
-
-    def has_callbacks(self) -> bool:
-        """Whether any per-object callbacks are registered."""
-        return self._callbacks is not None and len(self._callbacks) > 0
-
-    def execute_callbacks(self, current_time: float) -> None:
-        """Run the callbacks due at ``current_time`` (sim seconds)."""
-        if self._callbacks is not None:
-            for callback, dt in self._callbacks.due(current_time):
-                callback(self, dt)
-
-    def callback_steps_until_due(self, step: int, timestep: float, limit: int) -> int:
-        """How many steps from ``step`` on (at most ``limit``) run before a callback is due."""
-        if self._callbacks is None:
-            return limit
-        return self._callbacks.steps_until_due(step, timestep, limit)
-
-    def reset_callbacks(self) -> None:
-        """Restart the callback schedule from sim time 0."""
-        if self._callbacks is not None:
-            self._callbacks.reset()
-
-    # ----- helpers ------------------------------------------------------------------------
-
     def _require_sim(self, what: str) -> MultiRobotSimulationCore:
+        self.check_not_removed(what)
         if self.sim_core is None:
             raise ValueError(f"{what}: {self!r} is not part of a simulation")
         return self.sim_core
 
-    # A standalone object talks to PyBullet client 0; ``add_object`` re-reads the body from
-    # the simulation's own client, so a failed read here only affects standalone use.
-
-    def _standalone_mass(self) -> float:
-        try:
-            return float(p.getDynamicsInfo(self.body_id, -1)[0]) if self.body_id >= 0 else 0.0
-        except p.error:
-            return 0.0
-
-    def _standalone_pose(self) -> tuple[Sequence[float], Sequence[float]]:
-        try:
-            if self.body_id >= 0:
-                return p.getBasePositionAndOrientation(self.body_id)
-        except p.error:
-            pass
-        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+    @property
+    def _log(self) -> NamedLazyLogger:
+        """This object's logger (made on first use: most objects never log)."""
+        if self._logger is None:
+            self._logger = NamedLazyLogger(__name__)
+            self._refresh_log_prefix()
+        return self._logger
 
     def _refresh_log_prefix(self) -> None:
+        if self._logger is None:
+            return
         label = f"{self.object_id}:{self.name}" if self.name else str(self.object_id)
-        assert self._logger is not None
         self._logger.set_prefix(f"[{type(self).__name__}:{label}] ")

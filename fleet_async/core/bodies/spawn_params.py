@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field, fields
-from typing import Any
+from typing import Any, ClassVar
 
 from fleet_async.core.base.config_utils import dataclass_from_dict
 from fleet_async.core.base.types import CollisionMode, coerce_enum
@@ -13,6 +14,8 @@ from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.world.shapes import ShapeParams
 
 __all__ = ["SimObjectSpawnParams"]
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass
@@ -42,6 +45,9 @@ class SimObjectSpawnParams:
     collision_frame_pose: Pose | None = None
     collision_mode: CollisionMode = CollisionMode.NORMAL_3D
     user_data: dict[str, Any] = field(default_factory=dict)
+    name_required_in_config: ClassVar[bool] = True
+    """Whether :meth:`from_dict` requires ``name`` (the reference API: "name (str, required)";
+    agents' configs may leave it out)."""
 
     def __post_init__(self) -> None:
         # Spawning loops build one of these per object: the common, already-typed values pass
@@ -96,18 +102,34 @@ class SimObjectSpawnParams:
         """Build from a programmatic or YAML-style mapping.
 
         Besides the field names, accepts ``pose: [x, y, z]`` with optional ``yaw`` (radians) as
-        an alternative to ``initial_pose``. Shape entries may be ShapeParams or mappings.
+        an alternative to ``initial_pose``; when both are given, ``initial_pose`` takes
+        precedence (with a warning). Shape entries may be ShapeParams or mappings.
 
         Raises:
-            ValueError: for an unknown key (with the nearest valid one) or a bad value.
+            ValueError: if ``name`` is missing (SimObjectSpawnParams only), for an unknown key
+                (with the nearest valid one) or a bad value.
         """
+        where = f"{source}: " if source is not None else ""
         if not isinstance(config, dict):
-            raise ValueError(f"{cls.__name__}.from_dict: expected a mapping, got {config!r}")
+            raise ValueError(f"{where}{cls.__name__}.from_dict: expected a mapping, got {config!r}")
         config = dict(config)
+        if cls.name_required_in_config and config.get("name") is None:
+            raise ValueError(
+                f"{where}{cls.__name__}.from_dict: missing required 'name' field "
+                f"(keys given: {sorted(config)})"
+            )
         pose, yaw = config.pop("pose", None), config.pop("yaw", None)
-        if pose is not None or yaw is not None:
-            if "initial_pose" in config:
-                raise ValueError(f"{cls.__name__}: give either 'pose' or 'initial_pose', not both")
+        if "initial_pose" in config:
+            if pose is not None or yaw is not None:
+                logger.warning(
+                    "%s%s: both 'initial_pose' and 'pose'/'yaw' given; initial_pose takes "
+                    "precedence, pose=%r yaw=%r ignored",
+                    where,
+                    cls.__name__,
+                    pose,
+                    yaw,
+                )
+        elif pose is not None or yaw is not None:
             config["initial_pose"] = pose_from_config(
                 pose if pose is not None else [0.0, 0.0, 0.0], yaw, field_name="pose"
             )

@@ -1,6 +1,8 @@
 """Axis-aligned grids: world position to grid index and back, and visiting every grid point.
 
 Grid index ``i`` on an axis sits at ``offset + i * spacing`` on that axis (metres, world frame).
+The conversions are always 3-D, as in the reference API: 2-D input (``[x, y]``, ``[sx, sy]``)
+is taken as lying in the plane of index 0 on Z.
 """
 
 from __future__ import annotations
@@ -27,8 +29,9 @@ def world_to_grid(pos: Vector, spacing: float | Vector, offset: Vector | None = 
     """Convert a world position to the nearest 3-D grid index.
 
     Args:
-        pos: ``[x, y, z]`` in metres.
-        spacing: Grid spacing per axis (or one value for all), metres, each > 0.
+        pos: ``[x, y, z]`` in metres (or ``[x, y]``: z = 0).
+        spacing: Grid spacing per axis (or one value for all), metres, each > 0; two values
+            for X and Y leave Z at 1.
         offset: World position of grid index ``[0, 0, 0]`` (default: the origin).
 
     Returns:
@@ -37,7 +40,7 @@ def world_to_grid(pos: Vector, spacing: float | Vector, offset: Vector | None = 
     Raises:
         ValueError: If a vector has the wrong length, or a spacing is not > 0.
     """
-    position = strict_vector(pos, "pos", 3)
+    position = strict_vector(_as_3d(pos, 0.0), "pos", 3)
     step, origin = _grid_frame(spacing, offset)
     return [math.floor(v + 0.5) for v in ((position - origin) / step).tolist()]
 
@@ -48,8 +51,9 @@ def grid_to_world(
     """Convert a 3-D grid index to its world position.
 
     Args:
-        grid: ``[ix, iy, iz]``.
-        spacing: Grid spacing per axis (or one value for all), metres, each > 0.
+        grid: ``[ix, iy, iz]`` (or ``[ix, iy]``: iz = 0).
+        spacing: Grid spacing per axis (or one value for all), metres, each > 0; two values
+            for X and Y leave Z at 1.
         offset: World position of grid index ``[0, 0, 0]`` (default: the origin).
 
     Returns:
@@ -58,23 +62,29 @@ def grid_to_world(
     Raises:
         ValueError: If a vector has the wrong length, or a spacing is not > 0.
     """
-    index = strict_vector(grid, "grid", 3)
+    index = strict_vector(_as_3d(grid, 0), "grid", 3)
     step, origin = _grid_frame(spacing, offset)
     return (origin + index * step).tolist()
 
 
 def world_to_grid_2d(pos: Vector, spacing: float | Vector) -> list[int]:
-    """2-D form of :func:`world_to_grid`: ``[x, y]`` and ``[sx, sy]`` to ``[ix, iy]``."""
+    """2-D wrapper for :func:`world_to_grid`: ``[x, y]`` and ``[sx, sy]`` to ``[ix, iy, 0]``.
+
+    Three values, as the reference implementation returns (a script unpacks or indexes them).
+    """
     xy = strict_vector(pos, "pos", 2)
     sxy = normalize_vector_param(spacing, "spacing", 2)
-    return world_to_grid([xy[0], xy[1], 0.0], [sxy[0], sxy[1], 1.0])[:2]
+    return world_to_grid([xy[0], xy[1], 0.0], [sxy[0], sxy[1], 1.0])
 
 
 def grid_to_world_2d(grid: Sequence[int], spacing: float | Vector) -> list[float]:
-    """2-D form of :func:`grid_to_world`: ``[ix, iy]`` and ``[sx, sy]`` to ``[x, y]``."""
+    """2-D wrapper for :func:`grid_to_world`: ``[ix, iy]`` and ``[sx, sy]`` to ``[x, y, 0.0]``.
+
+    Three values, as the reference implementation returns.
+    """
     ij = strict_vector(grid, "grid", 2)
     sxy = normalize_vector_param(spacing, "spacing", 2)
-    return grid_to_world([ij[0], ij[1], 0], [sxy[0], sxy[1], 1.0])[:2]
+    return grid_to_world([ij[0], ij[1], 0], [sxy[0], sxy[1], 1.0])
 
 
 def grid_execution(
@@ -86,8 +96,9 @@ def grid_execution(
 ) -> None:
     """Call ``func(grid_index, world_pos, **args)`` at every point of a 3-D grid.
 
-    Points are visited with X varying fastest, then Y, then Z: for ``grid_num=[2, 2, 1]`` the
-    order is ``[0,0,0], [1,0,0], [0,1,0], [1,1,0]``. With ``func=None`` nothing is called.
+    Points are visited with Z varying fastest, then Y, then X (the reference implementation's
+    order): for ``grid_num=[2, 2, 1]`` the order is ``[0,0,0], [0,1,0], [1,0,0], [1,1,0]``.
+    With ``func=None`` nothing is called.
 
     Args:
         grid_num: ``[nx, ny, nz]`` points per axis, each >= 0 (default ``[1, 1, 1]``).
@@ -111,16 +122,25 @@ def grid_execution(
         return
     extra = dict(args or {})
     nx, ny, nz = (int(n) for n in counts)
-    for iz in range(nz):
+    for ix in range(nx):
         for iy in range(ny):
-            for ix in range(nx):
+            for iz in range(nz):
                 index = [ix, iy, iz]
                 func(index, (origin + np.array(index) * step).tolist(), **extra)
 
 
+def _as_3d(values: Any, z: float) -> Any:
+    """``[a, b]`` as ``[a, b, z]``; anything else unchanged (checked by the caller)."""
+    if isinstance(values, (list, tuple, np.ndarray)) and len(values) == 2:
+        return [*list(values), z]
+    return values
+
+
 def _grid_frame(spacing: float | Vector, offset: Vector | None) -> tuple[np.ndarray, np.ndarray]:
-    step = normalize_vector_param(spacing, "spacing", 3)
+    step = normalize_vector_param(_as_3d(spacing, 1.0), "spacing", 3)
     if not (step > 0).all():
         raise ValueError(f"spacing: expected values > 0, got {spacing!r}")
-    origin = np.zeros(3) if offset is None else normalize_vector_param(offset, "offset", 3)
+    origin = (
+        np.zeros(3) if offset is None else normalize_vector_param(_as_3d(offset, 0.0), "offset", 3)
+    )
     return step, origin

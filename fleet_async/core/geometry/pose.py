@@ -126,6 +126,17 @@ class Pose:
         return cls((x, y, z), quat_from_euler(*angles))
 
     @classmethod
+    def from_yaw(cls, x: float, y: float, z: float, yaw: float) -> Pose:
+        """Create a pose from a position in metres and a yaw (about Z) in radians.
+
+        Same as ``Pose.from_euler(x, y, z, yaw=yaw)``; the incumbent's scripts use this name.
+
+        Raises:
+            ValueError: If a coordinate or the angle is not a finite number.
+        """
+        return cls.from_euler(x, y, z, yaw=yaw)
+
+    @classmethod
     def from_pybullet(
         cls, position: Sequence[float] | np.ndarray, orientation: Sequence[float] | np.ndarray
     ) -> Pose:

@@ -124,23 +124,27 @@ class Path:
         height: float,
         rpy: Sequence[float] = (0.0, 0.0, 0.0),
     ) -> Path:
-        """Create the 4 corners of a rectangle, counter-clockwise about the plane's normal.
+        """Create a closed rectangular path through its corners, counter-clockwise about the
+        plane's normal.
 
-        Corners start at local ``(-width/2, -height/2)``; the first corner is not repeated.
+        Corners start at local ``(-width/2, -height/2)``; the first corner is repeated at the
+        end (5 waypoints), so a robot following the path comes back to where it started, as
+        in the reference implementation.
 
         Args:
             center: ``[x, y, z]`` (or ``[x, y]`` with z = 0) in metres, world frame.
             width: Side length along the local X axis, metres.
             height: Side length along the local Y axis, metres.
-            rpy: Roll, pitch, yaw of the rectangle's plane in radians; its normal is local Z.
+            rpy: Roll, pitch, yaw of the rectangle's plane in radians (see ``_planar``); its
+                normal is local Z.
 
         Raises:
             ValueError: If a size is not positive or ``center``/``rpy`` is malformed.
         """
         hw = 0.5 * _positive(width, "width")
         hh = 0.5 * _positive(height, "height")
-        corners = [(-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh)]
-        return cls._planar(center, corners, rpy, closed=True)
+        corners = [(-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh), (-hw, -hh)]
+        return cls._planar(center, corners, rpy)
 
     @classmethod
     def create_square(
@@ -164,37 +168,38 @@ class Path:
         start_angle: float = 0.0,
         end_angle: float = 2 * math.pi,
     ) -> Path:
-        """Create ``num_points`` waypoints on an elliptical arc from start to end angle.
+        """Create waypoints on an elliptical arc from start to end angle, both included.
 
-        A full turn (``|end - start| == 2 pi``) is a closed loop: the points are evenly spaced
-        and the start point is not repeated. Otherwise both ends are included. The path runs
+        ``num_points`` is the number of equal steps of the parameter angle, so the path has
+        ``num_points + 1`` waypoints (as the reference implementation makes them): a full turn
+        ends where it started, so a robot following it comes back. The path runs
         counter-clockwise when ``end_angle > start_angle``.
 
         Args:
             center: ``[x, y, z]`` (or ``[x, y]`` with z = 0) in metres, world frame.
             radius_x: Semi-axis along local X, metres.
             radius_y: Semi-axis along local Y, metres.
-            num_points: Number of waypoints, at least 2.
-            rpy: Roll, pitch, yaw of the ellipse's plane in radians.
+            num_points: Number of steps along the arc, at least 1.
+            rpy: Roll, pitch, yaw of the ellipse's plane in radians (see ``_planar``).
             start_angle: Start parameter angle in the local XY plane, radians.
             end_angle: End parameter angle in the local XY plane, radians.
 
         Raises:
-            ValueError: On a non-positive radius, fewer than 2 points, or equal angles.
+            ValueError: On a non-positive radius, fewer than 1 step, or equal angles.
         """
         rx, ry = _positive(radius_x, "radius_x"), _positive(radius_y, "radius_y")
-        if isinstance(num_points, bool) or not isinstance(num_points, int) or num_points < 2:
-            raise ValueError(f"num_points: expected an integer >= 2, got {num_points!r}")
+        if isinstance(num_points, bool) or not isinstance(num_points, int) or num_points < 1:
+            raise ValueError(f"num_points: expected an integer >= 1, got {num_points!r}")
         span = float(end_angle) - float(start_angle)
         if not math.isfinite(span) or span == 0.0:
             raise ValueError(
                 f"end_angle: expected a finite angle other than start_angle, got {end_angle!r}"
             )
-        closed = math.isclose(abs(span), 2.0 * math.pi, rel_tol=0.0, abs_tol=1e-9)
-        step = span / (num_points if closed else num_points - 1)
-        angles = [start_angle + k * step for k in range(num_points)]
+        angles = [start_angle + span * k / num_points for k in range(num_points + 1)]
         points = [(rx * math.cos(a), ry * math.sin(a)) for a in angles]
-        return cls._planar(center, points, rpy, closed=closed)
+        if math.isclose(abs(span), 2.0 * math.pi, rel_tol=0.0, abs_tol=1e-9):
+            points[-1] = points[0]  # a full turn closes exactly
+        return cls._planar(center, points, rpy)
 
     @classmethod
     def create_circle(
@@ -216,17 +221,27 @@ class Path:
         center: Sequence[float] | np.ndarray,
         points: list[tuple[float, float]],
         rpy: Sequence[float],
-        closed: bool,
     ) -> Path:
+        """Waypoints at planar ``points`` in a tilted plane, each facing the next one.
+
+        The plane's frame is ``rpy`` as intrinsic X-Y-Z rotations (roll about X, then pitch
+        about the new Y, then yaw about the newest Z), as the reference implementation tilts
+        its shapes; ``Pose.from_euler`` uses PyBullet's extrinsic convention instead. The last
+        waypoint keeps the heading of the segment that reaches it.
+        """
         origin = _center3(center)
-        frame = quat_from_euler(*_finite_floats(rpy, 3, "rpy", "[roll, pitch, yaw]"))
+        roll, pitch, yaw = _finite_floats(rpy, 3, "rpy", "[roll, pitch, yaw]")
+        frame = quat_multiply(
+            quat_multiply(quat_from_euler(roll, 0.0, 0.0), quat_from_euler(0.0, pitch, 0.0)),
+            quat_from_euler(0.0, 0.0, yaw),
+        )
         r = quat_to_rot_matrix(frame)
         ex = np.array([r[0], r[3], r[6]])
         ey = np.array([r[1], r[4], r[7]])
         n = len(points)
         waypoints = []
         for i, (px, py) in enumerate(points):
-            a, b = (i, i + 1) if i + 1 < n else ((i, 0) if closed else (i - 1, i))
+            a, b = (i, i + 1) if i + 1 < n else (i - 1, i)
             heading = math.atan2(points[b][1] - points[a][1], points[b][0] - points[a][0])
             turn = (0.0, 0.0, math.sin(0.5 * heading), math.cos(0.5 * heading))
             position = origin + px * ex + py * ey

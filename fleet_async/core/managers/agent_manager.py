@@ -175,27 +175,40 @@ class AgentManager(SimObjectManager[Agent]):
     # ----- spawning -----------------------------------------------------------------------
 
     def spawn_agents_grid(
-        self, num_agents: int, grid_params: GridSpawnParams, spawn_params: AgentSpawnParams
+        self,
+        num_agents: int,
+        grid_params: GridSpawnParams,
+        spawn_params: AgentSpawnParams,
+        *,
+        name_prefix: str | None = None,
     ) -> list[Agent]:
         """Alias of :meth:`spawn_objects_grid`."""
-        return self.spawn_objects_grid(num_agents, grid_params, spawn_params)
+        return self.spawn_objects_grid(
+            num_agents, grid_params, spawn_params, name_prefix=name_prefix
+        )
 
     def spawn_agents_grid_mixed(
         self,
         num_agents: int,
         grid_params: GridSpawnParams,
         spawn_params_list: Sequence[tuple[SimObjectSpawnParams, float]],
+        *,
+        name_prefix: str | None = None,
     ) -> list[Agent]:
         """Alias of :meth:`spawn_grid_mixed`."""
-        return self.spawn_grid_mixed(num_agents, grid_params, spawn_params_list)
+        return self.spawn_grid_mixed(
+            num_agents, grid_params, spawn_params_list, name_prefix=name_prefix
+        )
 
     def spawn_agent_grid_counts(
         self,
         grid_params: GridSpawnParams,
         spawn_params_count_list: Sequence[tuple[SimObjectSpawnParams, int]],
+        *,
+        name_prefix: str | None = None,
     ) -> list[Agent]:
         """Alias of :meth:`spawn_grid_counts`."""
-        return self.spawn_grid_counts(grid_params, spawn_params_count_list)
+        return self.spawn_grid_counts(grid_params, spawn_params_count_list, name_prefix=name_prefix)
 
     def _prepare_params(self, params: SimObjectSpawnParams) -> SimObjectSpawnParams:
         if not self.fleet_controller or not isinstance(params, AgentSpawnParams):

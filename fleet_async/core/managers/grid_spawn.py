@@ -11,7 +11,7 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -225,13 +225,14 @@ def assign_by_probability(
     grid: GridSpawnParams,
     count: int,
     probabilities: Sequence[float],
-    rng: np.random.Generator,
+    rng: Callable[[], np.random.Generator],
     what: str = "spawn_grid_mixed",
 ) -> tuple[np.ndarray, np.ndarray]:
     """Draw a type for each of the first ``count`` cells.
 
     One uniform draw per cell picks type ``i`` with probability ``probabilities[i]``; a draw
-    past their sum leaves the cell empty.
+    past their sum leaves the cell empty. ``rng`` gives the generator, asked for only once the
+    arguments are known to be good (so their errors come first).
 
     Raises:
         ValueError: for a probability outside [0, 1], a sum > 1, or too many cells.
@@ -245,7 +246,7 @@ def assign_by_probability(
             raise ValueError(f"{what}: probability of entry {i} must be in [0, 1], got {prob!r}")
     if math.fsum(probs) > 1.0 + 1e-9:
         raise ValueError(f"{what}: probabilities must sum to <= 1, got {probs} (sum {sum(probs)})")
-    kinds = np.searchsorted(np.cumsum(probs), rng.random(n), side="right")
+    kinds = np.searchsorted(np.cumsum(probs), rng().random(n), side="right")
     cells = np.flatnonzero(kinds < len(probs))
     return cells, kinds[cells]
 
@@ -253,10 +254,11 @@ def assign_by_probability(
 def assign_by_counts(
     grid: GridSpawnParams,
     counts: Sequence[int],
-    rng: np.random.Generator,
+    rng: Callable[[], np.random.Generator],
     what: str = "spawn_grid_counts",
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Exactly ``counts[i]`` cells of type ``i``, spread over the grid by a shuffle.
+    """Exactly ``counts[i]`` cells of type ``i``, spread over the grid by a shuffle (``rng``
+    gives the generator, asked for once the counts are known to fit).
 
     Raises:
         ValueError: for a negative count or a total above ``grid.total_cells``.
@@ -265,6 +267,6 @@ def assign_by_counts(
     _check_fits(sum(n), grid, what)
     labels = np.full(grid.total_cells, -1)
     labels[: sum(n)] = np.repeat(np.arange(len(n)), n)
-    labels = rng.permutation(labels)
+    labels = rng().permutation(labels)
     cells = np.flatnonzero(labels >= 0)
     return cells, labels[cells]

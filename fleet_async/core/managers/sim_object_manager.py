@@ -239,25 +239,34 @@ class SimObjectManager(Generic[T]):
     # ----- spawning -----------------------------------------------------------------------
 
     def spawn_objects_grid(
-        self, num_objects: int, grid_params: GridSpawnParams, spawn_params: SimObjectSpawnParams
+        self,
+        num_objects: int,
+        grid_params: GridSpawnParams,
+        spawn_params: SimObjectSpawnParams,
+        *,
+        name_prefix: str | None = None,
     ) -> list[T]:
         """Spawn ``num_objects`` copies of ``spawn_params`` on the first cells of the grid.
 
         Object ``i`` goes to cell ``i`` (X fastest, then Y, then Z) with the orientation of
-        ``spawn_params.initial_pose``.
+        ``spawn_params.initial_pose``; with ``name_prefix`` it is named ``<prefix>_<i>``.
 
         Raises:
             ValueError: if ``num_objects`` is negative or exceeds ``grid_params.total_cells``.
         """
         _check_params(spawn_params, "spawn_objects_grid.spawn_params")
         cells, kinds = assign_first_cells(grid_params, num_objects)
-        return self._spawn_on_cells(grid_params, cells, kinds, [spawn_params], "spawn_objects_grid")
+        return self._spawn_on_cells(
+            grid_params, cells, kinds, [spawn_params], "spawn_objects_grid", name_prefix
+        )
 
     def spawn_grid_mixed(
         self,
         num_objects: int,
         grid_params: GridSpawnParams,
         spawn_params_list: Sequence[tuple[SimObjectSpawnParams, float]],
+        *,
+        name_prefix: str | None = None,
     ) -> list[T]:
         """Fill the first ``num_objects`` cells, each with a type drawn by probability.
 
@@ -276,13 +285,17 @@ class SimObjectManager(Generic[T]):
         """
         what = "spawn_grid_mixed"
         params, probs = self._unpack(spawn_params_list, what)
-        cells, kinds = assign_by_probability(grid_params, num_objects, probs, self._rng(what))
-        return self._spawn_on_cells(grid_params, cells, kinds, params, what)
+        cells, kinds = assign_by_probability(
+            grid_params, num_objects, probs, lambda: self._rng(what)
+        )
+        return self._spawn_on_cells(grid_params, cells, kinds, params, what, name_prefix)
 
     def spawn_grid_counts(
         self,
         grid_params: GridSpawnParams,
         spawn_params_count_list: Sequence[tuple[SimObjectSpawnParams, int]],
+        *,
+        name_prefix: str | None = None,
     ) -> list[T]:
         """Spawn exactly ``count`` objects of each type on cells shuffled with ``sim_core.rng``.
 
@@ -294,8 +307,8 @@ class SimObjectManager(Generic[T]):
         """
         what = "spawn_grid_counts"
         params, counts = self._unpack(spawn_params_count_list, what)
-        cells, kinds = assign_by_counts(grid_params, counts, self._rng(what))
-        return self._spawn_on_cells(grid_params, cells, kinds, params, what)
+        cells, kinds = assign_by_counts(grid_params, counts, lambda: self._rng(what))
+        return self._spawn_on_cells(grid_params, cells, kinds, params, what, name_prefix)
 
     def spawn_objects_batch(self, params_list: Sequence[SimObjectSpawnParams]) -> list[T]:
         """Spawn one object per params with GUI rendering suspended (``sim_core.batch_spawn``)."""
@@ -387,16 +400,19 @@ class SimObjectManager(Generic[T]):
         kinds: np.ndarray,
         params: list[SimObjectSpawnParams],
         what: str,
+        name_prefix: str | None = None,
     ) -> list[T]:
-        """Spawn ``params[kinds[k]]`` at cell ``cells[k]``, keeping each type's orientation."""
+        """Spawn ``params[kinds[k]]`` at cell ``cells[k]``, keeping each type's orientation
+        (named ``<name_prefix>_<k>`` when a prefix is given)."""
         positions = grid.cell_positions()
         prepared = [self._prepare_params(prm) for prm in params]
         placed = [
             dataclasses.replace(
                 prepared[kind],
                 initial_pose=Pose(positions[cell], prepared[kind].initial_pose.orientation),
+                **({} if name_prefix is None else {"name": f"{name_prefix}_{k}"}),
             )
-            for cell, kind in zip(cells.tolist(), kinds.tolist(), strict=True)
+            for k, (cell, kind) in enumerate(zip(cells.tolist(), kinds.tolist(), strict=True))
         ]
         return self._spawn_params(placed, what)
 

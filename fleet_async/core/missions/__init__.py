@@ -10,7 +10,11 @@
 - ``AgentMissionApi`` (``agent_missions.py``): ``await agent.move(...)`` and the other agent
   commands, each queueing an Action and returning the runtime's event for it;
 - what the runtime reads back: ``SimEvents``, ``ActionStatus``, ``Action``, ``MoveAction``,
-  ``WaitAction``, and (for annotations only) ``MultiRobotSimulationCore``.
+  ``WaitAction``, and (for annotations only) ``MultiRobotSimulationCore``;
+- device composites (``hooks.py``): ``register_mission_hook`` lets ``fleet_async.tasks.devices``
+  implement ``elevator.ride`` and ``door.pass_through``, which need the mission layer's own
+  primitives; ``DeviceEvents`` names what devices emit, and ``Door``, ``Elevator``,
+  ``Workcell`` are named for annotations only.
 
 May import ``actions`` and below at run time.
 """
@@ -20,12 +24,19 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from fleet_async.core.actions.action import Action, MoveAction, WaitAction
+from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.missions.agent_missions import AgentMissionApi
+from fleet_async.core.missions.hooks import mission_hook, register_mission_hook
 from fleet_async.core.missions.mission_api import MissionRuntime, SimEventBus, SimMissionApi
 
 if TYPE_CHECKING:
+    # Devices stand above this layer: for annotations only.
+    from fleet_async.core.devices import Door as Door
+    from fleet_async.core.devices import Elevator as Elevator
+    from fleet_async.core.devices import Workcell as Workcell
+
     # The simulation class stands above this layer: for annotations only.
     from fleet_async.core.simulation import MultiRobotSimulationCore as MultiRobotSimulationCore
 
@@ -33,10 +44,13 @@ __all__ = [
     "Action",
     "ActionStatus",
     "AgentMissionApi",
+    "DeviceEvents",
     "MissionRuntime",
     "MoveAction",
     "SimEventBus",
     "SimEvents",
     "SimMissionApi",
     "WaitAction",
+    "mission_hook",
+    "register_mission_hook",
 ]

@@ -33,7 +33,9 @@ class AgentMissionApi:
     returns an event for it."""
 
     def _mission_runtime(self, what: str) -> MissionRuntime:
-        sim = getattr(self, "sim_core", None)
+        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        agent.check_not_removed(what)  # "needs a running mission" would mislead
+        sim = agent.sim_core
         runtime = None if sim is None else sim.mission_runtime
         if runtime is None:
             raise RuntimeError(
@@ -46,6 +48,7 @@ class AgentMissionApi:
         ``cancel()`` it, or watch ``status``, ``phase`` and ``progress``."""
         runtime = self._mission_runtime("agent.submit")
         agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        action.awaited = True  # e.g. a move on a fixed base fails rather than being skipped
         agent.add_action(action)
         return runtime.wait_action(agent, action)
 
@@ -72,7 +75,21 @@ class AgentMissionApi:
         return self.submit(WaitAction(duration=duration, action_type=action_type))
 
     def charge(self, duration: float) -> Any:
-        """Charge the battery for ``duration`` sim seconds."""
+        """Charge the battery for ``duration`` sim seconds.
+
+        Raises:
+            ValueError: if the agent has no battery (charging would only wait), saying how to
+                give it one.
+        """
+        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        if agent.battery_plugin is None:
+            raise ValueError(
+                f"agent.charge: {agent!r} has no battery, so charging would only wait. Give it "
+                "one: in a scenario, 'plugins: [{type: battery, config: {initial_soc: 0.5}}]' "
+                "on its entity; in Python, agent.add_plugin(BatteryPlugin(agent, "
+                "{'initial_soc': 0.5})) or AgentSpawnParams(..., plugins=[{'type': "
+                "'battery'}]). To wait without charging, use agent.wait(duration)"
+            )
         return self.wait(duration, action_type="charge")
 
     def move_joints(self, targets: Any, **options: Any) -> Any:

@@ -249,8 +249,10 @@ class PatrolController(Controller):
 
     Args:
         waypoints: Poses or [x, y, z] positions to visit.
-        wait: Sim seconds to pause at each waypoint.
+        wait: Sim seconds to pause at each waypoint (from the step it arrives in).
         loop: Start over after the last waypoint.
+        wait_time: The incumbent's name for ``wait`` (its configs say ``wait_time``); give one
+            of the two.
     """
 
     def __init__(
@@ -259,8 +261,16 @@ class PatrolController(Controller):
         wait: float = 0.0,
         loop: bool = True,
         params: ControllerParams | None = None,
+        wait_time: float | None = None,
     ):
         super().__init__(params)
+        if wait_time is not None:
+            if wait != 0.0:
+                raise ValueError(
+                    f"PatrolController: give either wait ({wait!r}) or wait_time "
+                    f"({wait_time!r}), not both"
+                )
+            wait = wait_time
         if not waypoints:
             raise ValueError("PatrolController.waypoints: expected at least one waypoint, got []")
         self.waypoints: list[Pose] = [

@@ -3,15 +3,23 @@
 Each agent on a built-in controller owns one *slot* of this engine. A slot follows its path one
 *segment* at a time; a segment moves the body from a start pose to a target pose along a
 straight line while slerping its orientation, both driven by one normalised progress
-``u`` in [0, 1] with a trapezoidal rate profile. The profile's limits are chosen per segment so
-that neither the linear (m/s, m/s^2) nor the angular (rad/s, rad/s^2) limits are exceeded:
+``u`` in [0, 1] that follows a trapezoidal velocity profile. The profile's limits are chosen per
+segment so that neither the linear (m/s, m/s^2) nor the angular (rad/s, rad/s^2) limits are
+exceeded:
 
     du/dt    <= min(v_max_along / L, w_max_about / theta)
     d2u/dt2  <= min(a_max_along / L, alpha_max_about / theta)
 
+Each step samples the exact profile ``u(t)`` (``segments.trapezoid_progress``) at the step's
+end, ``t = k * dt`` for the k-th step of the segment: the body starts moving in the step the
+segment starts, never moves further in a step than the limits allow from the state the
+previous step left, and lands exactly on the target in the step in which ``t`` reaches the
+profile's duration (2 m at 2 m/s and 5 m/s^2: 1.4 s, 14 steps of 0.1 s).
+
 A differential robot's path becomes ROTATE segments (L = 0, turn to face the next waypoint) and
-FORWARD segments (theta = 0, drive straight). An omnidirectional robot translates and rotates
-at once. Every segment starts and ends at rest and ends exactly on its target.
+FORWARD segments (theta = 0, drive straight). An omnidirectional robot drives every leg at its
+current orientation; with ``final_orientation_align`` both end with a turn in place to the last
+waypoint's orientation. Every segment starts and ends at rest and ends exactly on its target.
 
 ``advance(dt)`` integrates all moving slots with numpy in one pass. Python runs only when a
 segment ends (to plan the next one), never per robot per step.
@@ -35,8 +43,9 @@ from fleet_async.core.motion.segments import (
     EPS_LEN,
     MotionLimits,
     axis_cap,
-    braking_rate,
     heading_toward,
+    trapezoid_duration,
+    trapezoid_progress,
 )
 from fleet_async.core.world.state import KinematicState
 
@@ -83,14 +92,14 @@ class KinematicEngine:
     q1: np.ndarray
     q_goal: np.ndarray
     u: np.ndarray
-    du: np.ndarray
-    u_vmax: np.ndarray
-    u_amax: np.ndarray
+    steps: np.ndarray
+    u_peak: np.ndarray
+    u_t_acc: np.ndarray
+    u_t_end: np.ndarray
     theta: np.ndarray
     sl_dot: np.ndarray
     sl_theta: np.ndarray
     sl_sin: np.ndarray
-    carry: np.ndarray
     lin_scalar: np.ndarray
     ang_scalar: np.ndarray
     cmd: np.ndarray
@@ -124,14 +133,14 @@ class KinematicEngine:
             grow(name, (4,), np.float64, 0.0)
         for name in (
             "u",
-            "du",
-            "u_vmax",
-            "u_amax",
+            "steps",  # steps of the current segment taken so far
+            "u_peak",  # cruise rate of u (1/s)
+            "u_t_acc",  # s spent accelerating (and braking)
+            "u_t_end",  # s the whole segment takes
             "theta",
             "sl_dot",
             "sl_theta",
             "sl_sin",
-            "carry",
         ):
             grow(name, (), np.float64, 0.0)
         grow("lin_scalar", (), np.bool_, True)
@@ -176,8 +185,7 @@ class KinematicEngine:
     # ----- queries ------------------------------------------------------------------------
 
     def is_idle(self) -> bool:
-        """Whether the next ``advance`` would change nothing: no slot follows a path or a
-        velocity command, and no slot that just arrived still has its velocity to zero."""
+        """Whether ``advance`` would change nothing (no motion, no arrival left to settle)."""
         return not self._stopped and not np.count_nonzero(self.mode[: self._high])
 
     def is_moving(self, slot: int) -> bool:
@@ -272,7 +280,6 @@ class KinematicEngine:
         if self._plans[slot] is not None or self.mode[slot] == _POSE:
             self._plans[slot] = None
             self.mode[slot] = _IDLE
-            self.du[slot] = 0.0
             self._on_motion_end(slot, False)
 
     # ----- planning (Python, once per segment) ---------------------------------------------
@@ -298,8 +305,8 @@ class KinematicEngine:
                         return
                     continue
                 plan.stage = _DRIVING
-                keep = differential or not plan.final_align
-                if self._start(slot, target.position, orn if keep else target.orientation):
+                # Drive at the current orientation; the final one is reached by the turn below.
+                if self._start(slot, target.position, orn):
                     return
                 continue
             if plan.final_align and not plan.aligned:
@@ -364,10 +371,12 @@ class KinematicEngine:
         self.sl_sin[slot] = math.sin(sl_theta)
         self.theta[slot] = theta
         self.axis[slot] = axis
+        peak, t_acc, t_end = trapezoid_duration(rate_v, rate_a)
         self.u[slot] = 0.0
-        self.du[slot] = 0.0
-        self.u_vmax[slot] = rate_v
-        self.u_amax[slot] = rate_a
+        self.steps[slot] = 0.0
+        self.u_peak[slot] = peak
+        self.u_t_acc[slot] = t_acc
+        self.u_t_end[slot] = t_end
         self.mode[slot] = _POSE
         return True
 
@@ -376,7 +385,6 @@ class KinematicEngine:
         # the start of the next advance unless a new segment is under way by then.
         self._plans[slot] = None
         self.mode[slot] = _IDLE
-        self.du[slot] = 0.0
         self._stopped.append(slot)
         self._on_motion_end(slot, reached)
 
@@ -393,40 +401,41 @@ class KinematicEngine:
                 rows = self.row[idle]
                 self._store.velocity[rows] = 0.0
                 self._store.angular_velocity[rows] = 0.0
-                self.carry[idle] = 0.0
         mode = self.mode[: self._high]
-        active = np.count_nonzero(mode)
-        if not active:  # every slot idle: nothing to integrate
-            return
         pose_slots = np.flatnonzero(mode == _POSE)
         if len(pose_slots):
             self._advance_pose(pose_slots, dt)
-        if len(pose_slots) < active:  # some slots follow velocity commands
-            vel_slots = np.flatnonzero(mode == _VELOCITY)
-            if len(vel_slots):
-                self._advance_velocity(vel_slots, dt)
+        vel_slots = np.flatnonzero(mode == _VELOCITY)
+        if len(vel_slots):
+            self._advance_velocity(vel_slots, dt)
+
+    def advance_slot(self, slot: int, dt: float) -> None:
+        """Move one slot by ``dt`` seconds (an agent advanced on its own, outside a step)."""
+        if slot in self._stopped:
+            self._stopped.remove(slot)
+            if self.mode[slot] == _IDLE:
+                self._store.velocity[self.row[slot]] = 0.0
+                self._store.angular_velocity[self.row[slot]] = 0.0
+        if self.mode[slot] == _POSE:
+            self._advance_pose(np.array([slot]), dt)
+        elif self.mode[slot] == _VELOCITY:
+            self._advance_velocity(np.array([slot]), dt)
 
     def _advance_pose(self, s: np.ndarray, dt: float) -> None:
         store = self._store
         u = self.u[s]
-        amax = self.u_amax[s]
-        remaining = 1.0 - u
-        # `carry`: share of this step's acceleration budget already spent by the previous
-        # segment's last step (its velocity must fall to zero and the new one rise from it).
-        carry = self.carry[s]
-        rate = np.minimum(self.du[s] + amax * dt * (1.0 - carry), self.u_vmax[s])
-        rate = np.minimum(rate, braking_rate(remaining, amax, dt))
-        step = rate * dt
-        arrived = step >= remaining - 1e-12
+        steps = self.steps[s] + 1.0
+        self.steps[s] = steps
+        t_end = self.u_t_end[s]
+        # The step in which the profile's end falls is the arrival step (tolerance: the float
+        # error of k * dt, so that 14 steps of 0.1 s cover a 1.4 s segment).
+        elapsed = steps * dt
+        arrived = elapsed >= t_end - 1e-9
         any_arrived = bool(arrived.any())
-        u_new = np.where(arrived, 1.0, u + step) if any_arrived else u + step
-        self.u[s] = u_new
-        self.du[s] = np.where(arrived, 0.0, rate) if any_arrived else rate
+        u_new = trapezoid_progress(elapsed, self.u_peak[s], self.u_t_acc[s], t_end)
         if any_arrived:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                self.carry[s] = np.where(arrived, np.nan_to_num(rate / (amax * dt)), 0.0)
-        elif carry.any():
-            self.carry[s] = 0.0
+            u_new[arrived] = 1.0
+        self.u[s] = u_new
         rows = self.row[s]
         old_pos = store.position[rows]
         p0 = self.p0[s]
@@ -462,26 +471,30 @@ class KinematicEngine:
         rows = self.row[s]
         acc = np.concatenate([self.amax[s], self.alpha[s][:, 2:3]], axis=1) * dt
         cap = np.concatenate([self.vmax[s], self.wmax[s][:, 2:3]], axis=1)
-        vel = self.vel[s]
-        vel = vel + np.clip(self.cmd[s] - vel, -acc, acc)
+        old = self.vel[s]
+        vel = old + np.clip(self.cmd[s] - old, -acc, acc)
         vel = np.clip(vel, -cap, cap)
         self.vel[s] = vel
+        # The velocity changes linearly within the step, so the step covers its mean: a start
+        # from rest moves a * dt^2 / 2, as the acceleration limit allows.
+        mean = 0.5 * (old + vel)
         yaw = yaw_from_quats(store.orientation[rows])
-        cos, sin = np.cos(yaw), np.sin(yaw)
+        mid = yaw + 0.5 * mean[:, 3] * dt
+        cos, sin = np.cos(mid), np.sin(mid)
         world = np.stack(
-            [cos * vel[:, 0] - sin * vel[:, 1], sin * vel[:, 0] + cos * vel[:, 1], vel[:, 2]],
+            [cos * mean[:, 0] - sin * mean[:, 1], sin * mean[:, 0] + cos * mean[:, 1], mean[:, 2]],
             axis=1,
         )
         store.position[rows] += world * dt
-        new_yaw = yaw + vel[:, 3] * dt
+        new_yaw = yaw + mean[:, 3] * dt
         half = 0.5 * new_yaw
         store.orientation[rows] = np.stack(
             [np.zeros_like(half), np.zeros_like(half), np.sin(half), np.cos(half)], axis=1
         )
         store.velocity[rows] = world
         store.angular_velocity[rows] = np.stack(
-            [np.zeros_like(yaw), np.zeros_like(yaw), vel[:, 3]], axis=1
+            [np.zeros_like(yaw), np.zeros_like(yaw), mean[:, 3]], axis=1
         )
-        moving = np.any(vel != 0.0, axis=1)
+        moving = np.any(vel != 0.0, axis=1) | np.any(old != 0.0, axis=1)
         if moving.any():
             store.mark_moved(rows[moving])

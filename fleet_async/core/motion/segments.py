@@ -1,9 +1,8 @@
-"""Segment math of the kinematic engine: limits, headings, per-axis caps, the braking rate.
+"""Segment math of the kinematic engine: limits, headings, per-axis caps, the trapezoid.
 
 A segment moves a body from a start pose to a target pose; its progress ``u`` in [0, 1] follows
-a trapezoidal rate profile whose limits come from :class:`MotionLimits` through
-:func:`axis_cap`, and whose braking follows :func:`braking_rate` so that the last step lands
-exactly on the target (see ``kinematics.py``).
+a trapezoidal velocity profile (:func:`trapezoid_duration`, :func:`trapezoid_progress`) whose
+limits come from :class:`MotionLimits` through :func:`axis_cap` (see ``kinematics.py``).
 """
 
 from __future__ import annotations
@@ -16,7 +15,15 @@ import numpy as np
 from fleet_async.core.base.types import MovementDirection
 from fleet_async.core.geometry.quaternions import quat_from_euler, yaw_from_quats
 
-__all__ = ["EPS_ANGLE", "EPS_LEN", "MotionLimits", "axis_cap", "braking_rate", "heading_toward"]
+__all__ = [
+    "EPS_ANGLE",
+    "EPS_LEN",
+    "MotionLimits",
+    "axis_cap",
+    "heading_toward",
+    "trapezoid_duration",
+    "trapezoid_progress",
+]
 
 EPS_LEN = 1e-9  # m: shorter segments are skipped
 EPS_ANGLE = 1e-9  # rad: smaller rotations are skipped
@@ -49,22 +56,41 @@ def heading_toward(
     return quat_from_euler(0.0, 0.0, yaw)
 
 
-def braking_rate(remaining: np.ndarray, accel: np.ndarray, dt: float) -> np.ndarray:
-    """Fastest rate from which the discrete braking sequence still stops within ``remaining``.
+def trapezoid_duration(rate: float, accel: float) -> tuple[float, float, float]:
+    """Shape of the fastest rest-to-rest profile covering ``u`` from 0 to 1.
 
-    Braking as hard as allowed from rate ``v = (j + f) * c`` (``c = accel * dt``, j integer,
-    f in (0, 1]) moves ``v, v - c, ..., f * c`` per step and covers
-    ``dt * c * (j + 1) * (f + j / 2)``. Inverting that for the largest ``v`` that fits gives a
-    profile that never brakes harder than ``accel``, ends with a last step of at most ``c``
-    (so the final stop is within the limit too), and lands exactly on the target.
+    Args:
+        rate: Largest rate of ``u`` (1/s); may be ``inf``.
+        accel: Largest acceleration of ``u`` (1/s^2); may be ``inf``.
+
+    Returns:
+        ``(peak, t_acc, t_end)``: the cruise rate (lower than ``rate`` when the segment is too
+        short to reach it: a triangle), the seconds spent accelerating (and again braking),
+        and the profile's duration. ``t_end`` is 0 when both limits are infinite.
     """
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        c = accel * dt
-        scaled = remaining / (dt * c)
-        j = np.maximum(np.ceil((np.sqrt(1.0 + 8.0 * scaled) - 1.0) / 2.0) - 1.0, 0.0)
-        f = np.clip(scaled / (j + 1.0) - j / 2.0, 0.0, 1.0)
-        rate = (j + f) * c
-    return np.where(np.isfinite(c), rate, np.inf)
+    peak = min(rate, math.sqrt(accel)) if math.isfinite(accel) else rate
+    if not math.isfinite(peak):
+        return math.inf, 0.0, 0.0
+    t_acc = peak / accel if math.isfinite(accel) else 0.0
+    return peak, t_acc, t_acc + 1.0 / peak
+
+
+def trapezoid_progress(
+    t: np.ndarray, peak: np.ndarray, t_acc: np.ndarray, t_end: np.ndarray
+) -> np.ndarray:
+    """Progress ``u(t)`` of rest-to-rest profiles (see :func:`trapezoid_duration`), in [0, 1].
+
+    Accelerates at ``peak / t_acc`` for ``t_acc`` seconds, cruises at ``peak`` and brakes
+    symmetrically to stop at ``u = 1`` at ``t_end``; exact at every ``t``, so sampling it once
+    per step never exceeds the limits, whatever the step.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cruise = peak * (t - 0.5 * t_acc)
+        rising = 0.5 * peak * t * t / t_acc
+        left = np.maximum(t_end - t, 0.0)
+        braking = 1.0 - 0.5 * peak * left * left / t_acc
+        u = np.where(t < t_acc, rising, np.where(t > t_end - t_acc, braking, cruise))
+    return np.clip(u, 0.0, 1.0)
 
 
 def axis_cap(limit: np.ndarray, scalar: bool, direction: np.ndarray) -> float:

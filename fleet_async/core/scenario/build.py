@@ -11,6 +11,9 @@ nested layout is recognised by any of these sections, applied in this order:
 - ``world``: handed to ``sim.load_world(world, base_dir=...)``.
 - ``entities``: entity mappings, see :meth:`ScenarioApi.spawn_robots_from_config`.
 - ``plugins``: ``[{type: registered name | class: dotted.path, config: {...}, frequency: Hz}]``.
+- ``missions``: ``["module:function" | {function, args, kwargs, name}]``, async functions that
+  run the fleet, resolved at load (``scenario/missions.py``) and kept in
+  ``sim.scenario_missions``; ``fleet_async.run_scenario`` / ``fleet-async run`` run them.
 
 Relative files (``urdf_path``, a shape's ``mesh_path``, world files) are looked up next to the
 scenario file first (``base_dir``). Every error names the section and key (``entities[2].grid``),
@@ -30,6 +33,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.base.config_utils import load_yaml_config, register_class, resolve_class
 from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.devices import WorkcellPlugin
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.sim_object_manager import (
     SimObjectManager,
@@ -43,6 +47,7 @@ from fleet_async.core.scenario.errors import (
     reject_unknown_keys,
     where_prefix,
 )
+from fleet_async.core.scenario.missions import MissionSpec, parse_missions
 from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin
 
@@ -51,23 +56,35 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ACTION_TYPES",
+    "MANAGER_TYPES",
+    "PLUGIN_KEYS",
     "SCENARIO_SECTIONS",
     "SIM_PLUGIN_REGISTRY",
     "ScenarioApi",
     "register_sim_plugin",
 ]
 
-SCENARIO_SECTIONS = ("simulation", "world", "entities", "managers", "entity_classes", "plugins")
+SCENARIO_SECTIONS = (
+    "simulation",
+    "world",
+    "entities",
+    "managers",
+    "entity_classes",
+    "plugins",
+    "missions",
+)
 """Top-level sections of the nested layout."""
 
-SIM_PLUGIN_REGISTRY: dict[str, type[SimPlugin]] = {}
+SIM_PLUGIN_REGISTRY: dict[str, type[SimPlugin]] = {"workcell": WorkcellPlugin}
 """``plugins: [{type: ...}]`` names and their SimPlugin classes (:func:`register_sim_plugin`)."""
 
-_MANAGER_TYPES: dict[str, type[SimObjectManager[Any]]] = {
+MANAGER_TYPES: dict[str, type[SimObjectManager[Any]]] = {
     "agent": AgentManager,
     "sim_object": SimObjectManager,
 }
-_PLUGIN_KEYS = ("type", "class", "config", "frequency")
+"""``managers: [{type: ...}]`` names and the manager classes they create."""
+PLUGIN_KEYS = ("type", "class", "config", "frequency")
+"""Keys of a ``plugins:`` entry."""
 _SIMULATION_KEYS = frozenset(f.name for f in dataclasses.fields(SimulationParams))
 
 
@@ -87,6 +104,10 @@ def register_sim_plugin(name: str, cls: type[SimPlugin] | str) -> None:
 
 class ScenarioApi:
     """``from_dict`` / ``from_yaml`` / ``spawn_robots_from_config`` for MultiRobotSimulationCore."""
+
+    scenario_missions: tuple[MissionSpec, ...] = ()
+    """The missions the scenario names (its ``missions:`` section), resolved; empty for a
+    simulation not built from a scenario. ``fleet_async.run_scenario(sim)`` runs them."""
 
     @classmethod
     def from_dict(
@@ -202,12 +223,14 @@ def _build(
         _plugin_spec(e, f"plugins[{i}]", where)
         for i, e in enumerate(_section(config, "plugins", list, where))
     ]
+    missions = parse_missions(_section(config, "missions", list, where), where, base_dir)
     for name, path in _section(config, "entity_classes", dict, where).items():
         label = f"entity_classes.{name}"
         expect_type(path, str, "a dotted path 'package.module.Class'", where, label)
         with config_context(where, label, resolving=True):
             register_entity_class(name, path)
     sim = factory(params)
+    sim.scenario_missions = tuple(missions)
     try:
         declared = _create_managers(sim, managers, where)
         if world:
@@ -256,11 +279,11 @@ def _create_managers(sim: MultiRobotSimulationCore, entries: list[Any], where: s
         label = f"managers[{i}]"
         options = dict(expect_type(entry, dict, "a mapping", where, label))
         kind = options.pop("type", "agent")
-        if kind not in _MANAGER_TYPES:
+        if kind not in MANAGER_TYPES:
             raise ValueError(
-                f"{where}{label}.type: unknown manager type {kind!r}; valid: {list(_MANAGER_TYPES)}"
+                f"{where}{label}.type: unknown manager type {kind!r}; valid: {list(MANAGER_TYPES)}"
             )
-        cls = _MANAGER_TYPES[kind]
+        cls = MANAGER_TYPES[kind]
         name = expect_type(
             options.pop("name", None), str, "a name (string)", where, f"{label}.name"
         )
@@ -294,7 +317,7 @@ def _plugin_spec(
 ) -> tuple[str, type[SimPlugin], dict[str, Any] | None, float | None]:
     """(label, class, config, frequency) of one ``plugins:`` entry, checked."""
     expect_type(entry, dict, "a mapping", where, label)
-    reject_unknown_keys(list(entry), _PLUGIN_KEYS, where, label)
+    reject_unknown_keys(list(entry), PLUGIN_KEYS, where, label)
     if ("type" in entry) == ("class" in entry):
         raise ValueError(f"{where}{label}: give exactly one of 'type' or 'class', got {entry!r}")
     if "type" in entry:

@@ -23,6 +23,14 @@ from fleet_async.core.base.paths import resolve_data_file
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.devices import (
+    Door,
+    DoorParams,
+    Elevator,
+    ElevatorParams,
+    Workcell,
+    WorkcellParams,
+)
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.geometry.waypoints import Path
@@ -39,7 +47,7 @@ from fleet_async.core.world.shapes import ShapeParams
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["ACTION_TYPES", "spawn_entities"]
+__all__ = ["ACTION_TYPES", "SCENARIO_ENTITY_KEYS", "spawn_entities"]
 
 ACTION_TYPES: dict[str, type[Action]] = {
     "move": MoveAction,
@@ -52,12 +60,15 @@ ACTION_TYPES: dict[str, type[Action]] = {
 """``actions: [{type: ...}]`` names and the Action dataclasses they build (add your own)."""
 
 # Keys of an entity mapping that the scenario handles itself; the rest go to the class.
-_SCENARIO_ENTITY_KEYS = ("type", "grid", "manager", "batch_controller", "actions")
+SCENARIO_ENTITY_KEYS = ("type", "grid", "manager", "batch_controller", "actions")
 # Classes whose spawn params are known, so their entries are checked before anything spawns
 # and their grids take the bulk spawn path. Other classes spawn one by one via ``from_dict``.
 _KNOWN_PARAMS: dict[type[SimObject], type[SimObjectSpawnParams]] = {
     Agent: AgentSpawnParams,
     SimObject: SimObjectSpawnParams,
+    Door: DoorParams,
+    Elevator: ElevatorParams,
+    Workcell: WorkcellParams,
 }
 
 
@@ -118,10 +129,10 @@ def _plan_entity(
     type_name = config.pop("type", "agent")
     with config_context(where, f"{label}.type"):
         cls = get_entity_class(type_name)
-    scenario = {key: config.pop(key) for key in _SCENARIO_ENTITY_KEYS[1:] if key in config}
+    scenario = {key: config.pop(key) for key in SCENARIO_ENTITY_KEYS[1:] if key in config}
     params_cls = _KNOWN_PARAMS.get(cls)
     if params_cls is not None:
-        valid = [*params_cls.field_names(), "pose", "yaw", *_SCENARIO_ENTITY_KEYS]
+        valid = [*params_cls.field_names(), "pose", "yaw", *SCENARIO_ENTITY_KEYS]
         reject_unknown_keys(list(config), valid, where, label)
     is_agent = issubclass(cls, Agent)
     for key in ("batch_controller", "actions"):
@@ -237,12 +248,19 @@ def _spawn_objects(
         if manager is None:
             return [plan.cls.from_params(plan.params, sim)]
         if plan.grid is not None:
-            return list(manager.spawn_objects_grid(plan.count, plan.grid, plan.params))
+            prefix = plan.params.name  # a named grid entry: <name>_0, <name>_1, ...
+            return list(
+                manager.spawn_objects_grid(plan.count, plan.grid, plan.params, name_prefix=prefix)
+            )
         return list(manager.spawn_objects_batch([plan.params]))
     configs = [plan.config]
     if plan.grid is not None:
         cells = plan.grid.cell_positions()[: plan.count].tolist()
-        configs = [{**plan.config, "pose": cell} for cell in cells]
+        name = plan.config.get("name")
+        configs = [
+            {**plan.config, "pose": cell, **({} if name is None else {"name": f"{name}_{k}"})}
+            for k, cell in enumerate(cells)
+        ]
     labels = [
         f"{where}{plan.label}" + (f".grid[{k}]" if plan.grid is not None else "")
         for k in range(len(configs))

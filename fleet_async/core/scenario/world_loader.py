@@ -7,7 +7,9 @@ anything failed and ``on_error`` is ``"raise"`` (the default), the bodies alread
 removed and :class:`WorldLoadError` lists every failure; nothing half-loaded remains and no
 spawn event was emitted. With ``on_error: "warn"`` each failure is logged and the rest loads.
 
-The ``world_config`` mapping is checked in ``world_config.py``; file-format work (``model://``
+Models that Open-RMF marks as doors, lifts and workcells become Door, Elevator and Workcell
+devices instead of static bodies (``devices/rmf_world.py``). The ``world_config``
+mapping is checked in ``world_config.py``; file-format work (``model://``
 lookup, SDF rewriting for PyBullet) lives in ``gazebo_world.py`` and ``sdf_rewriter.py``.
 """
 
@@ -26,6 +28,11 @@ import pybullet as p
 
 from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.bodies.sim_object import SimObject
+from fleet_async.core.devices.rmf_world import (
+    device_class,
+    rmf_device_params,
+    rmf_workcell_params,
+)
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.scenario.gazebo_world import (
     AssetProblem,
@@ -123,6 +130,7 @@ class BodyLoader:
         self.skipped: set[str] = set()
         self.bodies: list[LoadedBody] = []
         self.failures: list[WorldLoadFailure] = []
+        self.devices: list[Any] = []  # spawn params of Open-RMF doors, lifts and workcells
 
     def fail(self, name: str, problem: AssetProblem) -> None:
         """Record that ``name`` could not be loaded."""
@@ -255,7 +263,15 @@ def _load_world_file(loader: BodyLoader, world: FsPath) -> None:
         if loader.skips(entry.name, entry.model_name):
             continue
         try:
+            device: Any = rmf_workcell_params(entry.model_name, entry.name, entry.pose)
+            if entry.element is not None:
+                device = rmf_device_params(entry.element, f"model {entry.name!r}")
+            if device is not None:
+                loader.devices.append(device)
+                continue
             _load_entry(loader, entry, world, version)
+        except ValueError as exc:
+            loader.fail(entry.name, AssetProblem(str(exc), [world]))
         except AssetProblem as problem:
             loader.fail(entry.name, problem)
 
@@ -323,10 +339,11 @@ class WorldLoadingApi:
                 the working directory); scenario files pass their own directory.
 
         Returns:
-            The new objects in load order, named after their include ``<name>`` (else the
-            URI's model name), SDF model name or mesh file stem. Their ``user_data`` holds
-            ``world_source`` (the source path), ``model_file`` (the SDF or mesh file the body
-            came from) and, for includes, ``uri``.
+            The new objects in load order (Open-RMF doors, lifts and workcells last, as
+            devices), named after their include ``<name>`` (else the URI's model name), SDF
+            model name or mesh file stem. Their ``user_data`` holds ``world_source`` (the
+            source path), ``model_file`` (the SDF or mesh file the body came from) and, for
+            includes, ``uri``.
 
         Raises:
             WorldLoadError: listing every model that failed (name, reason, paths), after
@@ -346,7 +363,15 @@ class WorldLoadingApi:
         unmatched = sorted(opts.skip - loader.skipped)
         if unmatched:
             logger.warning("load_world(%s): skip_models %s matched nothing", opts.source, unmatched)
-        return _wrap(sim, loader)
+        objects = _wrap(sim, loader)
+        try:
+            for params in loader.devices:
+                objects.append(device_class(params).from_params(params, sim))
+        except BaseException:
+            for obj in reversed(objects):
+                sim.remove_object(obj)
+            raise
+        return objects
 
 
 def _load_bodies(sim: MultiRobotSimulationCore, opts: WorldOptions) -> BodyLoader:

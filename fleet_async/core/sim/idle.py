@@ -4,7 +4,8 @@ A step is empty when running it would change nothing but the clock: no body move
 (kinematic motion, joints, attachments, physics off), no callback, plugin or per-object
 callback is due, no action starts, is polled or times out, no collision check has anything new
 to look at, nothing listens to every step (PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE
-handlers, which includes a running recorder, and the GUI), and step timing is not being
+handlers on the simulation's bus or an object's, which includes a running recorder, and the
+GUI), and step timing is not being
 logged. ``IdleSteps`` answers how many of the next steps are empty and
 advances the clock over them as if they had run: every schedule stays exact because nothing in
 the span was due, and collision checks that fall due in it would have found nothing new.
@@ -82,7 +83,7 @@ class IdleSteps:
         if any(has(event) for event in _PER_STEP_EVENTS):
             return 0
         world = self._world
-        if world.updaters():
+        if world.updaters() or world.has_update_listeners():
             return 0
         if len(self._joints) or any(
             m is not self._fleet and m is not self._joints for m in self._motion_systems()
@@ -132,8 +133,9 @@ class IdleApi:
         agent plugin or ``update(dt)`` override runs, no callback, plugin or per-object
         callback is due, no action is due to start, be polled or time out, no collision check
         has anything new to examine (nothing moved and no object joined or left since the last
-        check), nothing is subscribed to PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE (a
-        running recorder is such a subscriber), and neither the GUI, ``physics=True``,
+        check), nothing is subscribed to PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE on
+        the simulation's bus or PRE_UPDATE / POST_UPDATE on an object's (a running recorder is
+        such a subscriber), and neither the GUI, ``physics=True``,
         step-timing logs nor a motion system other than the built-in ones needs every step.
         Action and collision events, the monitor (fed once per frame by ``run_simulation``)
         and the mission runtime's own timers do not count: the mission driver combines this

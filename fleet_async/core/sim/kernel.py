@@ -7,9 +7,12 @@ phases in order, each a call into the module that owns it:
 2. ``callbacks``        - simulation callbacks, plugins and per-object callbacks that are due.
 3. ``agent_update``     - PRE_UPDATE, motion systems and overridden ``update(dt)``, POST_UPDATE.
 4. ``attachments``      - attached objects follow their parent links.
-5. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
-6. ``collision_check``  - the collision pipeline, when due (``collision/``).
-7. ``events_post_step`` - the clock advances, the GUI is synced, POST_STEP event.
+5. ``pose_flush``       - push the step's poses to PyBullet (only with physics, the GUI or
+   ``sync_pybullet_every_step``; otherwise PyBullet is synced lazily).
+6. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
+7. ``collision_check``  - the collision pipeline, when due (``collision/``).
+8. ``events_post_step`` - the clock advances, POST_STEP event (then, with
+   ``sync_pybullet_every_step``, what its handlers wrote is pushed too).
 
 Profiling (``return_profiling``, ``profiling.py``) runs the same phases through a timer.
 Real-time pacing, the monitor and GUI input wrap this loop from the layer above (``view/``);
@@ -21,25 +24,25 @@ kernel plus scenario loading, world loading, recording, the monitor, the GUI and
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any, TypeVar, cast
+from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
 
 import numpy as np
 
 from fleet_async.core.agents.fleet import FleetMotion
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.scheduling import PeriodicSchedule
-from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
 from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
 from fleet_async.core.sim.idle import IdleApi, IdleSteps
+from fleet_async.core.sim.objects_api import ObjectsApi
 from fleet_async.core.sim.params import SimulationParams
-from fleet_async.core.sim.plugins import SimPlugin
+from fleet_async.core.sim.plugins import SimPlugin, as_plugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
-from fleet_async.core.sim.registry import MotionSystem, RegistryApi
+from fleet_async.core.sim.pybullet_view import PyBulletViewApi
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.state import KinematicState
@@ -57,7 +60,14 @@ _LOG_LEVELS = {"debug": 10, "info": 20, "warn": 30, "warning": 30, "error": 40, 
 _Sim = TypeVar("_Sim", bound="SimulationKernel")
 
 
-class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
+class MotionSystem(Protocol):
+    """Something that advances many objects per step (e.g. a vectorised controller)."""
+
+    def advance(self, dt: float) -> None:
+        """Move every object this system owns by one step of ``dt`` seconds."""
+
+
+class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi):
     """The clock, the step loop and what it moves (objects, agents, plugins, managers).
 
     Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
@@ -98,13 +108,15 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
         self._motion_systems: list[MotionSystem] = [self._fleet, self._joint_motion]
         self._step_count = 0
         self._collision_count = 0
-        self._physics_bodies = self._params.physics or self._backend.is_gui
         self._paused = False
         self._initialized = False
         self._profiler = StepProfiler(
             self._params.profiling_interval, self._params.enable_time_profiling
         )
         self._memory = MemoryProfiler(self._params.enable_memory_profiling)
+        self._last_profiling: Mapping[str, Any] | None = None
+        self._collision_timings: dict[str, float] | None = None
+        self._profiling_step = False
         self._idle = IdleSteps(
             self._params.timestep,
             self.events,
@@ -114,13 +126,17 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
             self._collision,
             lambda: self._motion_systems,
             self._joint_motion,
-            lambda: self._backend.is_gui or self._params.physics or self._profiler.log_summary,
+            lambda: self.is_gui or self._params.physics or self._profiler.log_summary,
         )
+        # PyBullet sees the step's poses only where something needs them: a physics step, the
+        # GUI, or a script that asked for it (sync_pybullet_every_step).
+        flush = self._params.physics or self.is_gui or self._params.sync_pybullet_every_step
         self._phases: tuple[tuple[str, Callable[[], None]], ...] = (
             ("events_pre_step", self._phase_pre_step),
             ("callbacks", self._phase_callbacks),
             ("agent_update", self._phase_motion),
             ("attachments", self._world.attachments.follow_all),
+            *((("pose_flush", self.sync_pybullet),) if flush else ()),
             *((("step_simulation", self._phase_physics),) if self._params.physics else ()),
             ("collision_check", self._phase_collision),
             ("events_post_step", self._phase_post_step),
@@ -132,21 +148,6 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
     def params(self) -> SimulationParams:
         """The simulation settings."""
         return self._params
-
-    @property
-    def client(self) -> int:
-        """PyBullet physics client id, for raw ``pybullet`` calls (``physicsClientId=``).
-
-        Bodies of objects spawned since the last step are created first, so raw calls see
-        every object."""
-        if self._world.has_pending_bodies:
-            self._world.create_pending_bodies()
-        return self._backend.client
-
-    @property
-    def is_gui(self) -> bool:
-        """Whether a GUI window is open (False after a headless fallback)."""
-        return self._backend.is_gui
 
     @property
     def state(self) -> KinematicState:
@@ -184,16 +185,6 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
         return self._step_count * self._params.timestep
 
     @property
-    def sim_objects(self) -> list[SimObject]:
-        """Every object, in spawn order."""
-        return self._world.objects
-
-    @property
-    def agents(self) -> list[SimObject]:
-        """Every agent, in spawn order."""
-        return self._world.agents
-
-    @property
     def in_step(self) -> bool:
         """Whether ``step_once`` is running."""
         return self._world.in_step
@@ -213,76 +204,86 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
         """Registered plugins, in registration order."""
         return list(self._plugins)
 
-    def body_mass(self, body_id: int, link: int = -1) -> float:
-        """Mass (kg) PyBullet holds for one link of ``body_id`` (-1: the base); 0.0 for no
-        body (-1)."""
-        return self._backend.body_mass(body_id, link) if body_id >= 0 else 0.0
+    # ----- callbacks, plugins, managers, motion systems -----------------------------------
 
-    def get_object_by_id(self, object_id: int) -> SimObject | None:
-        """The object with ``object_id``, or None."""
-        return self._world.get(object_id)
-
-    # ----- objects ------------------------------------------------------------------------
-
-    def add_object(self, obj: SimObject, notify: bool = True) -> None:
-        """Register ``obj`` (``SimObject.__init__`` does this when given ``sim_core``).
-
-        Args:
-            obj: The object.
-            notify: Emit the spawn events now (else ``sim.world.announce(obj)`` does later).
-
-        Raises:
-            ValueError: if ``obj`` already belongs to this or another simulation.
-        """
-        self._world.add(obj, notify)
-
-    def remove_object(self, obj: SimObject) -> None:
-        """Remove ``obj`` from the simulation, its managers and PyBullet.
-
-        Objects it carried are detached where they are.
-
-        Raises:
-            ValueError: if ``obj`` is not part of this simulation.
-        """
-        if self._world.get(obj.object_id) is not obj:
-            raise ValueError(f"remove_object: {obj!r} is not part of this simulation")
-        for manager in list(self._managers):
-            manager.remove_object(obj)
-        self._world.remove(obj)
-
-    def set_poses(
+    def register_callback(
         self,
-        object_ids: Sequence[int],
-        positions: np.ndarray,
-        orientations: np.ndarray,
-        *,
-        preserve_velocity: bool = True,
+        callback: Callable[[MultiRobotSimulationCore, float], Any],
+        frequency: float | None = None,
     ) -> None:
-        """Set the poses of N objects in one call (arrays of shape (N, 3) and (N, 4)).
+        """Call ``callback(sim, dt)`` every step (None) or at ``frequency`` Hz of sim time."""
+        self._callbacks.add(callback, frequency, owner="register_callback", now=self.sim_time)
+
+    def unregister_callback(self, callback_func: Callable[..., Any]) -> bool:
+        """Remove a callback; return whether it was registered."""
+        return self._callbacks.remove(callback_func)
+
+    def register_plugin(
+        self,
+        plugin_or_cls: SimPlugin | type[SimPlugin],
+        config: dict[str, Any] | None = None,
+        frequency: float | None = None,
+    ) -> SimPlugin:
+        """Register a plugin instance, or instantiate a SimPlugin subclass with ``config``.
 
         Raises:
-            ValueError: on shape mismatch, non-finite values or a zero quaternion.
-            KeyError: for an object id that is not registered.
+            TypeError: if the argument is not a SimPlugin or SimPlugin subclass.
+            ValueError: if ``config`` is given with an instance.
         """
-        self._world.set_poses(
-            object_ids, positions, orientations, preserve_velocity=preserve_velocity
+        plugin = as_plugin(plugin_or_cls, cast("MultiRobotSimulationCore", self), config)
+        freq = frequency if frequency is not None else plugin.frequency
+        self._plugin_schedule.add(
+            plugin.on_step,
+            freq,
+            owner=f"register_plugin({type(plugin).__name__})",
+            now=self.sim_time,
         )
+        self._plugins.append(plugin)
+        plugin.on_init()
+        return plugin
 
-    def get_poses(self, object_ids: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-        """Return (positions (N, 3), orientations (N, 4)) copies for N objects.
+    def register_manager(self, manager: Any) -> None:
+        """Keep ``manager`` in sync with removals and resets; duplicate calls are ignored."""
+        if any(m is manager for m in self._managers):
+            return
+        manager.sim_core = self
+        self._managers.append(manager)
 
-        Raises:
-            KeyError: for an object id that is not registered.
-        """
-        return self._world.get_poses(object_ids)
+    def unregister_manager(self, manager: Any) -> bool:
+        """Forget a manager; return whether it was registered."""
+        for i, m in enumerate(self._managers):
+            if m is manager:
+                del self._managers[i]
+                return True
+        return False
+
+    def get_manager(self, name: str) -> Any | None:
+        """The registered manager called ``name``, or None."""
+        return next((m for m in self._managers if getattr(m, "name", None) == name), None)
+
+    def add_motion_system(self, system: MotionSystem) -> None:
+        """Advance ``system`` in every step's motion phase (vectorised controllers)."""
+        if system not in self._motion_systems:
+            self._motion_systems.append(system)
+
+    def remove_motion_system(self, system: MotionSystem) -> None:
+        """Stop advancing ``system``."""
+        if system in self._motion_systems:
+            self._motion_systems.remove(system)
 
     # ----- the step loop ------------------------------------------------------------------
 
-    def step_once(self, return_profiling: bool = False) -> dict[str, float] | None:
+    def step_once(self, return_profiling: bool = False) -> dict[str, Any] | None:
         """Run one step (skipped while paused).
 
         Args:
-            return_profiling: Return ``{phase: ms, ..., "total": ms}`` for this step.
+            return_profiling: Return this step's timings in ms: the reference API's keys
+                (``phase1_update``, ``phase2_pose_flush``, ``phase3_aabb_grid_flush``,
+                ``agent_update``, ``callbacks``, ``step_simulation``, ``collision_check``,
+                ``collision_breakdown`` when the collision check ran, ``events_pre_step``,
+                ``events_post_step``, ``events_collision``, ``monitor_update``, ``total``),
+                fleet_async's ``attachments``, and fields added by ``record_profiling``
+                (see ``sim/profiling.py``).
 
         Returns:
             The timings when ``return_profiling`` is set, else None.
@@ -291,12 +292,14 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
             return None
         if not self._initialized:
             self.initialize_simulation()
-        if self._physics_bodies and self._world.has_pending_bodies:
-            self._world.create_pending_bodies()  # dynamics collide with every body
         self._world.in_step = True
+        self._collision_timings = None
+        self._profiling_step = return_profiling or self._profiler.log_summary
         try:
-            if return_profiling or self._profiler.log_summary:
-                timings = self._profiler.run(self._phases)
+            if self._profiling_step:
+                timings: dict[str, Any] | None = self._profiler.run(
+                    self._phases, lambda: self._collision_timings
+                )
             else:
                 for _, phase in self._phases:
                     phase()
@@ -304,12 +307,22 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
                 timings = None
         finally:
             self._world.in_step = False
+        self._last_profiling = None if timings is None else MappingProxyType(timings)
         return timings if return_profiling else None
+
+    @property
+    def last_profiling(self) -> Mapping[str, Any] | None:
+        """The last step's timings (read-only) if it was profiled, else None."""
+        return self._last_profiling
 
     def _phase_pre_step(self) -> None:
         if self.events.has_handlers(SimEvents.PRE_STEP):
             self.events.emit(
-                SimEvents.PRE_STEP, sim=self, step=self._step_count, sim_time=self.sim_time
+                SimEvents.PRE_STEP,
+                sim=self,
+                step=self._step_count,
+                dt=self._params.timestep,
+                sim_time=self.sim_time,
             )
 
     def _phase_callbacks(self) -> None:
@@ -325,38 +338,42 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
         dt = self._params.timestep
         if self.events.has_handlers(SimEvents.PRE_UPDATE):
             self.events.emit(SimEvents.PRE_UPDATE, sim=self, dt=dt)
+        world = self._world
+        before = world.emit_pre_update(dt) if world.has_update_listeners() else None
         for system in tuple(self._motion_systems):
             system.advance(dt)
-        for obj in self._world.updaters():
+        for obj in world.updaters():
             obj.update(dt)
+        if before is not None:
+            world.emit_post_update(dt, before)
         if self.events.has_handlers(SimEvents.POST_UPDATE):
             self.events.emit(SimEvents.POST_UPDATE, sim=self, dt=dt)
 
     def _phase_physics(self) -> None:
-        self._backend.sync(self._world.store)
         self._backend.step_physics()
         self._world.read_back_dynamic()
 
     def _phase_collision(self) -> None:
         if self._collision.is_due(self._step_count, self._params.timestep):
-            self._collision.run()
+            if self._profiling_step:  # the profile reports the check's own breakdown
+                _, self._collision_timings = self._collision.check()
+            else:
+                self._collision.run()
 
     def _phase_post_step(self) -> None:
         self._step_count += 1
-        if self._backend.is_gui:
-            self._backend.sync(self._world.store)
         if self.events.has_handlers(SimEvents.POST_STEP):
             self.events.emit(
-                SimEvents.POST_STEP, sim=self, step=self._step_count, sim_time=self.sim_time
+                SimEvents.POST_STEP,
+                sim=self,
+                step=self._step_count,
+                dt=self._params.timestep,
+                sim_time=self.sim_time,
             )
+        if self._params.sync_pybullet_every_step:  # what POST_STEP handlers wrote, too
+            self.sync_pybullet()
 
     # ----- PyBullet's view, profiling -------------------------------------------------------
-
-    def _push_dirty(self, rows: np.ndarray) -> None:
-        store = self._world.store
-        dirty = rows[store.dirty[rows]]
-        if len(dirty):
-            self._backend.push_rows(store, dirty)
 
     def record_profiling(self, name: str, value_ms: float) -> None:
         """Add ``value_ms`` to custom profiling field ``name`` for the current step."""
@@ -365,12 +382,6 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
     def get_memory_usage(self) -> dict[str, float] | None:
         """``{"current_mb", "peak_mb"}`` of the Python heap; None unless memory profiling is on."""
         return self._memory.usage()
-
-    def sync_pybullet(self) -> int:
-        """Create pending bodies and push every pose PyBullet has not seen yet (before raw
-        ``pybullet`` queries); return how many poses were pushed."""
-        self._world.create_pending_bodies()
-        return self._backend.sync(self._world.store)
 
     # ----- running ------------------------------------------------------------------------
 
@@ -427,19 +438,3 @@ class SimulationKernel(IdleApi, RegistryApi, SimMissionApi, CollisionApi):
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-    # ----- rendering ----------------------------------------------------------------------
-
-    def disable_rendering(self) -> None:
-        """Stop GUI rendering (for fast spawning)."""
-        self._backend.set_rendering(False)
-
-    def enable_rendering(self) -> None:
-        """Resume GUI rendering."""
-        self._backend.set_rendering(True)
-
-    @contextmanager
-    def batch_spawn(self) -> Iterator[None]:
-        """Spawn many objects with rendering suspended; rendering is restored afterwards."""
-        with self._backend.rendering_disabled():
-            yield

@@ -49,6 +49,39 @@ class SimulationParams:
         max_steps_per_frame: Steps run back to back to catch up when pacing falls behind.
         gui_min_fps: Minimum GUI redraw rate while pacing.
         seed: Seed of the simulation's random generator (``sim.rng``).
+        enable_collision_shapes: GUI: draw collision shapes instead of visual ones.
+        enable_structure_transparency: GUI: draw static structures (the world) see-through.
+        enable_shadows: GUI: draw shadows.
+        enable_gui_panel: GUI: show PyBullet's side panel.
+        ignore_static_collision: Leave pairs of two static objects out of collision checks.
+        enable_time_profiling: Log the time each step phase takes.
+        profiling_interval: Steps between two time-profiling reports.
+        enable_memory_profiling: Track memory use (tracemalloc) while running.
+        enable_collision_color_change: Colour objects red while they collide.
+        spatial_hash_cell_size_mode: How the broad phase sizes its cells: "auto_initial"
+            (from the objects at the first check), "auto_adaptive" (re-sized as objects come
+            and go) or "constant" (``spatial_hash_cell_size``).
+        spatial_hash_cell_size: Cell size in metres for the "constant" mode.
+        collision_detection_method: Narrow phase: "closest_points", "contact_points" or
+            "hybrid"; None picks by physics (contacts with physics on, distances without).
+        collision_margin: Metres: closer than this counts as touching (closest-points method).
+        multi_cell_threshold: Objects larger than this many cells are hashed into every cell
+            they cover instead of one.
+        enable_floor: Add a floor plane at z = 0.
+        camera_config: Initial camera (``camera_mode``, ``camera_view_type``, ...), as
+            ``setup_camera`` takes it.
+        model_paths: Directories searched first for URDF, mesh and ``model://`` files.
+        window_width: GUI window width in pixels.
+        window_height: GUI window height in pixels.
+        monitor_width: Monitor window width in pixels.
+        monitor_height: Monitor window height in pixels.
+        monitor_x: Monitor window x position in pixels (-1: placed by the window system).
+        monitor_y: Monitor window y position in pixels (-1: placed by the window system).
+        sync_pybullet_every_step: Push every pose PyBullet has not seen at the end of each
+            step, for scripts that call ``pybullet`` directly on the simulation's bodies. Off
+            by default: PyBullet is then synced lazily, when something needs its view (a
+            narrow-phase query, a frame, the GUI, physics, ``sim.sync_pybullet()``), and a
+            headless kinematic fleet never pays a reset per robot per step.
         collision_sweep: Also report pairs that touched between two checks while neither pair
             of poses touches (each object taken to move on the straight line between its
             positions at the two checks; its orientation is the one at the check). Catches a
@@ -91,6 +124,7 @@ class SimulationParams:
     monitor_x: int = -1
     monitor_y: int = -1
     seed: int = 0
+    sync_pybullet_every_step: bool = False
     collision_sweep: bool = False
 
     def __post_init__(self) -> None:

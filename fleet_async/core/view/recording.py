@@ -351,8 +351,8 @@ class SimulationRecorder:
         self._view = None
         self._wall0 = self._clock()
         self._write_slots(1)
-        # Low priority: the frame shows what other post-step handlers did this step.
-        self._sim.events.on(SimEvents.POST_STEP, self._on_post_step, priority=-100)
+        # A high number runs late: the frame shows what other post-step handlers did.
+        self._sim.events.on(SimEvents.POST_STEP, self._on_post_step, priority=100)
         self._recording = True
         logger.info("recording to %s (%d fps, %s time)", self.output, self._fps, self._time_base)
 

@@ -230,6 +230,11 @@ class PyBulletBackend:
         """Mass of one link of a body as PyBullet holds it (kg; link -1 is the base)."""
         return float(p.getDynamicsInfo(body_id, link, physicsClientId=self._client)[0])
 
+    def body_total_mass(self, body_id: int) -> float:
+        """Mass of every link of a body summed (kg)."""
+        links = range(-1, p.getNumJoints(body_id, physicsClientId=self._client))
+        return float(sum(self.body_mass(body_id, link) for link in links))
+
     def set_body_mass(self, body_id: int, mass: float) -> None:
         """Change a body's base mass (0 makes it immovable by dynamics)."""
         p.changeDynamics(body_id, -1, mass=mass, physicsClientId=self._client)

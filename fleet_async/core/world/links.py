@@ -8,14 +8,62 @@ costs 0.8 s per 10,000 bodies).
 
 from __future__ import annotations
 
+import logging
 import numbers
 
 import pybullet as p
 
-__all__ = ["resolve_joint_index", "resolve_link_index"]
+__all__ = [
+    "UnknownNameError",
+    "joint_index",
+    "link_index",
+    "resolve_joint_index",
+    "resolve_link_index",
+]
+
+logger = logging.getLogger(__name__)
+
+
+class UnknownNameError(ValueError):
+    """A link or joint name the body does not have (the message lists the names it has)."""
 
 
 def resolve_link_index(body_id: int, link: int | str, physics_client_id: int = 0) -> int:
+    """Resolve a link name (or index) to its index, as the reference API does.
+
+    Returns -1 for ``"base_link"`` and for a name the body does not have; the latter is logged
+    as a warning that lists the body's link names (a typo would otherwise quietly mean the
+    base). :func:`link_index` raises instead.
+
+    Raises:
+        ValueError: If an index is outside ``[-1, numJoints)`` or there is no such body.
+        TypeError: If ``link`` is neither an int nor a str.
+    """
+    try:
+        return link_index(body_id, link, physics_client_id)
+    except UnknownNameError as exc:
+        logger.warning("resolve_link_index: %s; returning -1", exc)
+        return -1
+
+
+def resolve_joint_index(body_id: int, joint: int | str, physics_client_id: int = 0) -> int:
+    """Resolve a joint name (or index) to its index, as the reference API does.
+
+    Returns -1 for a name the body does not have, logged as a warning that lists the body's
+    joint names. :func:`joint_index` raises instead.
+
+    Raises:
+        ValueError: If an index is outside ``[0, numJoints)`` or there is no such body.
+        TypeError: If ``joint`` is neither an int nor a str.
+    """
+    try:
+        return joint_index(body_id, joint, physics_client_id)
+    except UnknownNameError as exc:
+        logger.warning("resolve_joint_index: %s; returning -1", exc)
+        return -1
+
+
+def link_index(body_id: int, link: int | str, physics_client_id: int = 0) -> int:
     """Resolve a link name (or index) of a PyBullet body to its link index.
 
     The base is index -1. A name matches the base link's own name, then each joint's child
@@ -30,8 +78,8 @@ def resolve_link_index(body_id: int, link: int | str, physics_client_id: int = 0
         The link index, -1 for the base.
 
     Raises:
-        ValueError: If an index is outside ``[-1, numJoints)`` or the name is unknown (the
-            message lists the body's link names).
+        ValueError: If an index is outside ``[-1, numJoints)``, or the name is unknown
+            (:class:`UnknownNameError`; the message lists the body's link names).
         TypeError: If ``link`` is neither an int nor a str.
     """
     count, base = _body_info(body_id, physics_client_id)
@@ -45,10 +93,10 @@ def resolve_link_index(body_id: int, link: int | str, physics_client_id: int = 0
         return names.index(link) - 1
     if link == "base_link":
         return -1
-    raise ValueError(f"Body {body_id} has no link named {link!r}; known links: {names}")
+    raise UnknownNameError(f"Body {body_id} has no link named {link!r}; known links: {names}")
 
 
-def resolve_joint_index(body_id: int, joint: int | str, physics_client_id: int = 0) -> int:
+def joint_index(body_id: int, joint: int | str, physics_client_id: int = 0) -> int:
     """Resolve a joint name (or index) of a PyBullet body to its joint index.
 
     Args:
@@ -60,8 +108,8 @@ def resolve_joint_index(body_id: int, joint: int | str, physics_client_id: int =
         The joint index, in ``[0, numJoints)``.
 
     Raises:
-        ValueError: If an index is outside ``[0, numJoints)`` or the name is unknown (the
-            message lists the body's joint names).
+        ValueError: If an index is outside ``[0, numJoints)``, or the name is unknown
+            (:class:`UnknownNameError`; the message lists the body's joint names).
         TypeError: If ``joint`` is neither an int nor a str.
     """
     count, _ = _body_info(body_id, physics_client_id)
@@ -73,7 +121,7 @@ def resolve_joint_index(body_id: int, joint: int | str, physics_client_id: int =
     ]
     if joint in names:
         return names.index(joint)
-    raise ValueError(f"Body {body_id} has no joint named {joint!r}; known joints: {names}")
+    raise UnknownNameError(f"Body {body_id} has no joint named {joint!r}; known joints: {names}")
 
 
 def _body_info(body_id: int, client: int) -> tuple[int, str]:

@@ -64,7 +64,7 @@ class ShapeParams:
     half_extents: list[float] = field(default_factory=lambda: [0.5, 0.5, 0.5])
     radius: float = 0.5
     height: float = 1.0
-    rgba_color: list[float] = field(default_factory=lambda: [0.7, 0.7, 0.7, 1.0])
+    rgba_color: list[float] = field(default_factory=lambda: [0.8, 0.8, 0.8, 1.0])
     frame_pose: Pose | None = None
 
     def __post_init__(self) -> None:

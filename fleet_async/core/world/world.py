@@ -8,7 +8,8 @@ their collision mode or attach another object.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,10 +17,9 @@ import pybullet as p
 
 from fleet_async.core.base.events import EventBus, SimEvents
 from fleet_async.core.base.types import CollisionMode
-from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.world.attachments import Attachment, AttachmentSet
+from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
-from fleet_async.core.world.links import resolve_link_index
+from fleet_async.core.world.carrying import Carrying
 from fleet_async.core.world.pending import (
     PENDING_BODY,
     Deferred,
@@ -30,6 +30,7 @@ from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
     from fleet_async.core.bodies.sim_object import SimObject
+    from fleet_async.core.bodies.standalone import StandaloneState
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["World"]
@@ -37,7 +38,7 @@ __all__ = ["World"]
 logger = logging.getLogger(__name__)
 
 
-class World(PendingBodiesApi):
+class World(Carrying, PendingBodiesApi):
     """Objects, rows and attachments of one simulation.
 
     Args:
@@ -68,6 +69,7 @@ class World(PendingBodiesApi):
         self._agents: dict[int, SimObject] = {}
         self._updaters: dict[int, SimObject] = {}
         self._with_callbacks: dict[int, SimObject] = {}
+        self._update_listeners: dict[int, SimObject] = {}
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._saved_mass: dict[int, float] = {}
         self._next_id = 0
@@ -127,6 +129,10 @@ class World(PendingBodiesApi):
         """The object with ``object_id``, or None."""
         return self._objects.get(object_id)
 
+    def objects_by_id(self) -> Mapping[int, SimObject]:
+        """A read-only live view ``{object_id: object}``."""
+        return MappingProxyType(self._objects)
+
     def updaters(self) -> tuple[SimObject, ...]:
         """Objects whose class overrides ``update(dt)``, in spawn order."""
         return tuple(self._updaters.values())
@@ -145,7 +151,13 @@ class World(PendingBodiesApi):
         removed = list(self._objects.values())
         for obj in removed:
             obj.unbind()
-        for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
+        for registry in (
+            self._objects,
+            self._agents,
+            self._updaters,
+            self._with_callbacks,
+            self._update_listeners,
+        ):
             registry.clear()
         self._attachments.clear()
         self._pending.clear()
@@ -165,6 +177,7 @@ class World(PendingBodiesApi):
             owner = "this" if obj.sim_core is self._sim else "another"
             raise ValueError(f"add_object: {obj!r} already belongs to {owner} simulation")
         body = obj.raw_body_id
+        solo = obj.standalone_state
         pos: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
         orn: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0, 1.0)
         pending = None
@@ -173,12 +186,13 @@ class World(PendingBodiesApi):
                 raise ValueError(f"add_object: {obj!r} has a pending body nobody described")
             pending, pos, orn = self._expected
             self._expected = None
-        elif body >= 0:
+        elif body >= 0 and not (solo is not None and solo.pose_written):
             pos, orn = self._backend.read_pose(body)
-        elif obj.state_row >= 0:
+        elif obj.state_row >= 0:  # the pose it kept outside a simulation
             pose = obj.get_pose()
             pos, orn = pose.position, pose.orientation
-        dynamic = self._physics and obj.mass > 0
+        # Dynamics move a body only if PyBullet gives its base a mass.
+        dynamic = self._physics and body >= 0 and self._backend.body_mass(body) > 0
         object_id = self._next_id
         self._next_id += 1
         row = self._store.allocate(
@@ -199,20 +213,38 @@ class World(PendingBodiesApi):
             self._with_callbacks[object_id] = obj
         if obj.has_event_bus():
             self._entity_buses = True
+            self.on_entity_handlers_changed(obj)
         if dynamic:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
         if pending is not None:
             self._pending.add(pending, row, obj)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
             p.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self._backend.client)
+        if solo is not None:
+            self._adopt_standalone(obj, solo, row)
         if notify:
             self.announce(obj)
+
+    def _adopt_standalone(self, obj: SimObject, solo: StandaloneState, row: int) -> None:
+        """Bring in what ``obj`` kept outside a simulation: its pose, reaching this client's
+        PyBullet, and attachments to objects already here (the others wait on their end)."""
+        if solo.pose_written:
+            self._store.dirty[row] = True
+            if not self.in_step:
+                self._backend.push_rows(self._store, np.array([row]))
+        for record in list(solo.links):
+            other = record.child if record.parent is obj else record.parent
+            if other.sim_core is self._sim:
+                solo.forget(record)
+                self.attach(record.parent, record.child, record.link_index, record.relative, False)
 
     def announce(self, obj: SimObject) -> None:
         """Emit the spawn events of ``obj`` (``add`` does it unless told not to)."""
         self._events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
         if obj.spawned_event is not None:
             self._events.emit(obj.spawned_event, sim=self._sim, agent=obj)
+        if obj.has_event_bus():
+            obj.events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
 
     def remove(self, obj: SimObject) -> None:
         """Remove ``obj`` from the simulation and PyBullet; its children are detached in place.
@@ -229,7 +261,13 @@ class World(PendingBodiesApi):
             self.detach(obj, child, None, None)
         obj.on_removed()
         object_id, row = obj.object_id, obj.state_row
-        for registry in (self._objects, self._agents, self._updaters, self._with_callbacks):
+        for registry in (
+            self._objects,
+            self._agents,
+            self._updaters,
+            self._with_callbacks,
+            self._update_listeners,
+        ):
             registry.pop(object_id, None)
         self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
         if obj.raw_body_id == PENDING_BODY:
@@ -241,6 +279,8 @@ class World(PendingBodiesApi):
             self._events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
             if obj.removed_event is not None:
                 self._events.emit(obj.removed_event, sim=self._sim, agent=obj)
+            if obj.has_event_bus():
+                obj.events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
         finally:
             obj.unbind()
             self._store.release(row)
@@ -348,6 +388,42 @@ class World(PendingBodiesApi):
         else:
             self._with_callbacks.pop(obj.object_id, None)
 
+    def on_entity_handlers_changed(self, obj: SimObject) -> None:
+        """Track which objects listen to their own PRE_UPDATE / POST_UPDATE (only those pay)."""
+        bus = obj.events if obj.has_event_bus() else None
+        if bus is not None and (
+            bus.has_handlers(SimEvents.PRE_UPDATE) or bus.has_handlers(SimEvents.POST_UPDATE)
+        ):
+            self._update_listeners[obj.object_id] = obj
+        else:
+            self._update_listeners.pop(obj.object_id, None)
+
+    def has_update_listeners(self) -> bool:
+        """Whether any object listens to its own PRE_UPDATE / POST_UPDATE."""
+        return bool(self._update_listeners)
+
+    def emit_pre_update(self, dt: float) -> list[tuple[SimObject, np.ndarray]]:
+        """PRE_UPDATE on each listening object's bus (``dt``), in object id order; returns
+        their poses before the motion phase, for :meth:`emit_post_update`."""
+        store, out = self._store, []
+        for key in sorted(self._update_listeners):
+            obj = self._update_listeners[key]
+            row = obj.state_row
+            out.append((obj, np.concatenate([store.position[row], store.orientation[row]])))
+            obj.events.emit(SimEvents.PRE_UPDATE, sim=self._sim, dt=dt)
+        return out
+
+    def emit_post_update(self, dt: float, before: list[tuple[SimObject, np.ndarray]]) -> None:
+        """POST_UPDATE on each listening object's bus (``dt``, ``moved``)."""
+        store = self._store
+        for obj, pose in before:
+            if obj.sim_core is not self._sim:  # removed during the motion phase
+                continue
+            row = obj.state_row
+            now = np.concatenate([store.position[row], store.orientation[row]])
+            moved = not np.array_equal(now, pose)
+            obj.events.emit(SimEvents.POST_UPDATE, sim=self._sim, dt=dt, moved=moved)
+
     def _push_dynamic(self, row: int, preserve_velocity: bool) -> None:
         body = int(self._store.body_id[row])
         lin, ang = p.getBaseVelocity(body, physicsClientId=self._backend.client)
@@ -373,104 +449,3 @@ class World(PendingBodiesApi):
             physicsClientId=self._backend.client,
         )
         return np.asarray(state[4], dtype=float), np.asarray(state[5], dtype=float)
-
-    # ----- attach / detach (SimObject.attach_object and detach_object land here) ----------
-
-    def attach(
-        self,
-        parent: SimObject,
-        child: SimObject,
-        link: int | str,
-        relative_pose: Pose | None,
-        joint_type: int,
-        keep_world_pose: bool,
-    ) -> bool:
-        """Attach ``child`` to ``parent``'s ``link``; see ``SimObject.attach_object``."""
-        if child is parent:
-            raise ValueError(f"attach_object: cannot attach {parent!r} to itself")
-        if child.sim_core is not self._sim:
-            raise ValueError(
-                f"attach_object: {child!r} is not part of the same simulation as {parent!r}"
-            )
-        held = self._attachments.of_child(child)
-        if held is not None:
-            where = "this object" if held.parent is parent else repr(held.parent)
-            raise ValueError(
-                f"attach_object: {child!r} is already attached to {where}; detach it first"
-            )
-        if self._attachments.is_ancestor(child, parent):
-            raise ValueError(
-                f"attach_object: {child!r} carries {parent!r}; attaching would make a cycle"
-            )
-        if relative_pose is not None and keep_world_pose:
-            raise ValueError(
-                "attach_object: give either relative_pose or keep_world_pose=True, not both"
-            )
-        if joint_type != p.JOINT_FIXED:
-            raise ValueError(
-                f"attach_object: joint_type {joint_type!r} is not supported; "
-                "only pybullet.JOINT_FIXED (4) is"
-            )
-        link_index = (
-            resolve_link_index(parent.body_id, link, physics_client_id=self._backend.client)
-            if parent.body_id >= 0
-            else -1
-        )
-        if keep_world_pose:
-            link_pos, link_orn = (
-                self.link_pose(parent, link_index)
-                if link_index != -1
-                else (
-                    self._store.position[parent.state_row],
-                    self._store.orientation[parent.state_row],
-                )
-            )
-            relative = (
-                Pose.from_arrays_unchecked(link_pos.copy(), link_orn.copy())
-                .inverse()
-                .compose(child.get_pose())
-            )
-        else:
-            relative = relative_pose if relative_pose is not None else Pose([0.0, 0.0, 0.0])
-        att = Attachment(parent, child, link_index, relative)
-        self._attachments.add(att)
-        row = child.state_row
-        if not self._store.kinematic[row]:
-            # A carried body is moved by its carrier, not by dynamics, until it is dropped.
-            self._saved_mass[child.object_id] = child.mass
-            self._backend.set_body_mass(child.body_id, 0.0)
-            self._store.kinematic[row] = True
-            self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
-        self._attachments.place_child(att)
-        if not self.in_step:
-            self._backend.sync(self._store)
-        return True
-
-    def detach(
-        self,
-        parent: SimObject,
-        child: SimObject,
-        drop_pose: Pose | None,
-        drop_relative_pose: Pose | None,
-    ) -> bool:
-        """Detach ``child`` from ``parent``; see ``SimObject.detach_object``."""
-        if drop_pose is not None and drop_relative_pose is not None:
-            raise ValueError("detach_object: give either drop_pose or drop_relative_pose, not both")
-        att = self._attachments.of_child(child)
-        if att is None or att.parent is not parent:
-            logger.warning(
-                "detach_object: %r is not attached to %r; nothing detached", child, parent
-            )
-            return False
-        self._attachments.remove(child)
-        mass = self._saved_mass.pop(child.object_id, None)
-        if mass is not None:
-            row = child.state_row
-            self._backend.set_body_mass(child.body_id, mass)
-            self._store.kinematic[row] = False
-            self._dynamic_rows = np.append(self._dynamic_rows, row)
-        if drop_pose is not None:
-            child.set_pose(drop_pose, preserve_velocity=False)
-        elif drop_relative_pose is not None:
-            child.set_pose(child.get_pose().compose(drop_relative_pose), preserve_velocity=False)
-        return True
