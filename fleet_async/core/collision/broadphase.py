@@ -99,11 +99,11 @@ def candidate_pairs(
         xy = _shared_cell_pairs(*_entries(lo_xy, span_xy, ~big), moved)
         pairs.append(xy[flat[xy[:, 0]] | flat[xy[:, 1]]])
     if any_big:
-        big_idx = np.flatnonzero(big)
+        big_idx = big.nonzero()[0]
         a = np.repeat(big_idx, n)
         b = np.tile(np.arange(n), len(big_idx))
         keep = (a != b) & (moved[a] | moved[b])
-        pairs.append(np.stack([a[keep], b[keep]], axis=1))
+        pairs.append(_pairs(a[keep], b[keep]))
     out = np.concatenate(pairs) if len(pairs) > 1 else pairs[0]
     return _sorted_unique(out, n, True)
 
@@ -120,7 +120,15 @@ def _sorted_unique(pairs: np.ndarray, n: int, may_repeat: bool) -> np.ndarray:
     code = np.sort(first * n + second)
     if may_repeat and len(code) > 1:
         code = code[np.concatenate(([True], code[1:] != code[:-1]))]
-    return np.stack([code // n, code % n], axis=1)
+    return _pairs(code // n, code % n)
+
+
+def _pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(K, 2) int64 array of the pairs (a[k], b[k]) (cheaper than ``np.stack``)."""
+    out = np.empty((len(a), 2), dtype=np.int64)
+    out[:, 0] = a
+    out[:, 1] = b
+    return out
 
 
 def _max3(a: np.ndarray) -> np.ndarray:
@@ -137,7 +145,7 @@ def _entries(
     within +-2**20 cells (farther cells may share keys: extra candidates, which the AABB test
     drops). ``members`` None means all objects; ``owner`` None means entry i is object i.
     """
-    idx = None if members is None else np.flatnonzero(members)
+    idx = None if members is None else members.nonzero()[0]
     if idx is None:
         keys, s, owner = lo @ _WEIGHTS, span, None
     else:
@@ -156,7 +164,7 @@ def _entries(
         top = int(col.max())
         parts_k, parts_w = [keys], [which]
         for k in range(1, top + 1):
-            extra = np.flatnonzero(col >= k)
+            extra = (col >= k).nonzero()[0]
             parts_k.append(keys[extra] + k * _WEIGHTS[axis])
             parts_w.append(which[extra])
         keys, which = np.concatenate(parts_k), np.concatenate(parts_w)
@@ -183,13 +191,13 @@ def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.nda
     same = k_sorted[1:] == k_sorted[:-1]
     if not same.any():
         return _EMPTY
-    first = np.flatnonzero(same)
+    first = same.nonzero()[0]
     if not (same[1:] & same[:-1]).any():  # no cell holds three or more: neighbours pair up
         a_e, b_e = entries[first], entries[first + 1]
     else:
         # Pair every entry with each later entry of its run of equal keys.
         m = len(entries)
-        boundary = np.flatnonzero(np.concatenate(([True], ~same, [True])))
+        boundary = np.concatenate(([True], ~same, [True])).nonzero()[0]
         after = np.repeat(boundary[1:], np.diff(boundary)) - np.arange(m) - 1
         first = np.repeat(np.arange(m), after)
         offset = np.arange(len(first)) - np.repeat(np.cumsum(after) - after, after) + 1
@@ -198,7 +206,7 @@ def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.nda
     a = a_e if owner is None else owner[a_e]
     b = b_e if owner is None else owner[b_e]
     keep = moved[a] | moved[b]
-    return np.stack([a[keep], b[keep]], axis=1)
+    return _pairs(a[keep], b[keep])
 
 
 def _in_shared_slots(keys: np.ndarray) -> np.ndarray:
@@ -219,7 +227,7 @@ def _in_shared_slots(keys: np.ndarray) -> np.ndarray:
         local = np.arange(e, dtype=np.int32)
         table[slot] = local  # one writer of each slot wins; which one does not matter
         winner = table[slot]
-        lost = np.flatnonzero(winner != local)
+        lost = (winner != local).nonzero()[0]
         if not len(lost):
             break
         beaten_by = winner[lost]

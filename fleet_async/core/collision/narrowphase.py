@@ -96,7 +96,7 @@ class NarrowPhase:
         out = np.zeros(k, dtype=bool)
         if exact.any():
             out[exact] = self._box_distance(row_pairs[exact], pos[exact]) <= self.margin
-        rest = np.flatnonzero(~exact)
+        rest = (~exact).nonzero()[0]
         if positions is None and not aabb_checked:
             rest = rest[self.aabbs_overlap(row_pairs[rest])]
         if len(rest):

@@ -164,7 +164,7 @@ class CollisionSystem:
         if self._relaid:
             self._relayout()
         flags = store.moved[:high]
-        moved = np.flatnonzero(flags) if np.count_nonzero(flags) else _NO_ROWS
+        moved = flags.nonzero()[0] if np.count_nonzero(flags) else _NO_ROWS
         # Most rows moved and none is special: one pass over every row beats gathers.
         whole = self._plain and 4 * len(moved) >= high
         if len(moved) and not (whole and self.geometry.refresh_all(high, store)):
@@ -187,13 +187,13 @@ class CollisionSystem:
             & (mode != _DISABLED)
             & ((geo.owner[:high] != store.object_id[:high]) | (geo.mode[:high] != mode))
         )
-        new_rows = np.flatnonzero(stale)
+        new_rows = stale.nonzero()[0]
         if len(new_rows):
             geo.register(new_rows, store)
             self._start[new_rows] = store.position[new_rows]
         geo.mode[:high] = np.where(live, mode, geo.mode[:high])
         part = live & (mode != _DISABLED)
-        self._rows = np.flatnonzero(part)
+        self._rows = part.nonzero()[0]
         self._all_rows = len(self._rows) == high
         modes = mode[self._rows]
         flat, static = modes == _FLAT, modes == _STATIC
@@ -309,7 +309,7 @@ class CollisionSystem:
             checked = False
         else:
             row_pairs, timings = self.filter_pairs(ignore_static)
-            moved_rows = np.flatnonzero(self._sim.state.moved[: self._sim.state.high_water])
+            moved_rows = self._sim.state.moved[: self._sim.state.high_water].nonzero()[0]
             checked = True
         t1 = time.perf_counter()
         events_ms = self._finish(row_pairs, moved_rows, collision_color, checked)
@@ -344,7 +344,7 @@ class CollisionSystem:
     def _sweep_test(self, row_pairs: np.ndarray, touching: np.ndarray) -> None:
         """Mark pairs that touched on the way (were not in contact before, are not now)."""
         store, geo = self._sim.state, self.geometry
-        apart = np.flatnonzero(~touching)
+        apart = (~touching).nonzero()[0]
         apart = apart[~self._active.contains(pair_codes(store.object_id[row_pairs[apart]]))]
         if not len(apart):
             return
