@@ -8,18 +8,23 @@ Workload (the same for every N): N box robots (0.1 m cube, kinematic) on a ceil(
 with 1 m spacing at z = 0.1; half of them, chosen with a fixed seed, get one goal uniform in
 (-10, g + 10) on x and y (g = grid side in m); omni controller with max_linear_vel 2.0 and
 max_angular_vel 3.0; timestep 0.1 s; collision checks every step (NORMAL_3D, closest points,
-margin 0.02 m); 10 warm-up steps, then 100 timed step_once() calls.
+margin 0.02 m; swept with ``--sweep``); 10 warm-up steps, then 100 timed step_once() calls.
+With ``--repeat R`` each size runs R times, each in a fresh simulation, and the median step
+time is reported beside every run's (memory is measured in the first).
 
-Run:  fleet-async bench [--n 100 1000 10000] [--large] [--json] [--profile]
- or:  python benchmarks/fleet_bench.py (the same flags)
+Run:  fleet-async bench [--n 100 1000 10000] [--large] [--repeat R] [--sweep] [--json]
+          [--profile]
+ or:  python benchmarks/fleet_bench.py (the same flags, and --incumbent VENV)
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import gc
 import json
 import math
+import statistics
 import sys
 import time
 import tracemalloc
@@ -48,6 +53,7 @@ __all__ = [
     "python_heap_per_agent",
     "run",
     "run_from_args",
+    "run_repeated",
     "spawn_fleet",
 ]
 
@@ -56,7 +62,7 @@ TIMED_STEPS = 100
 TIMESTEP = 0.1
 """Sim seconds per step of the workload."""
 DEFAULT_SIZES = (100, 1000, 10000)
-LARGE_SIZE = 50000
+LARGE_SIZE = 100000
 """The fleet size ``--large`` adds."""
 SEED = 42
 """Seed of the generator that picks the movers and their goals."""
@@ -126,21 +132,25 @@ def _set_goals(agents: list[Agent], n: int) -> None:
         agents[idx].set_goal_pose(Pose.from_xyz(gx, gy, 0.1))
 
 
-def run(n: int, profile: bool = False) -> dict[str, Any]:
+def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True) -> dict[str, Any]:
     """Run the workload for N agents.
 
     Args:
         n: Fleet size.
         profile: Also return ``phases_ms``: mean ms per timed step of each step phase.
+        sweep: Run with ``collision_sweep=True``.
+        memory: Measure the Python heap per agent (a second, traced spawn); else None.
 
     Returns:
         ``n``, ``step_ms`` (mean wall ms per timed step), ``real_time_factor``, ``spawn_s``
         (wall seconds), ``python_heap_kb_per_agent``, ``rss_kb_per_agent``, ``moving_after``
-        (agents still moving after the timed steps), ``collisions`` and, with ``profile``,
-        ``phases_ms``.
+        (agents still moving after the timed steps), ``collisions``, ``collision_sweep`` and,
+        with ``profile``, ``phases_ms``.
     """
     gc.collect()
-    with MultiRobotSimulationCore(bench_params()) as sim:
+    with MultiRobotSimulationCore(
+        dataclasses.replace(bench_params(), collision_sweep=sweep)
+    ) as sim:
         rss0 = _rss_bytes()
         t0 = time.perf_counter()
         agents = spawn_fleet(sim, n)
@@ -149,6 +159,7 @@ def run(n: int, profile: bool = False) -> dict[str, Any]:
         _set_goals(agents, n)
         for _ in range(WARMUP_STEPS):
             sim.step_once()
+        gc.collect()
         phases: dict[str, float] = {}
         t0 = time.perf_counter()
         for _ in range(TIMED_STEPS):
@@ -164,24 +175,42 @@ def run(n: int, profile: bool = False) -> dict[str, Any]:
         "step_ms": step_ms,
         "real_time_factor": TIMESTEP * 1000.0 / step_ms,
         "spawn_s": spawn_s,
-        "python_heap_kb_per_agent": python_heap_per_agent(n),
+        "python_heap_kb_per_agent": python_heap_per_agent(n) if memory else None,
         "rss_kb_per_agent": rss_bytes / 1024.0 / n,
         "moving_after": moving,
         "collisions": collisions,
+        "collision_sweep": sweep,
     }
     if profile:
         result["phases_ms"] = phases
     return result
 
 
+def run_repeated(
+    n: int, repeat: int = 1, profile: bool = False, sweep: bool = False
+) -> dict[str, Any]:
+    """:func:`run` ``repeat`` times (fresh simulations); the first run's result with
+    ``step_ms`` the median of all and ``step_ms_runs`` every run's, in order."""
+    runs = [run(n, profile, sweep, memory=i == 0) for i in range(max(1, repeat))]
+    result = dict(runs[0])
+    result["step_ms_runs"] = [r["step_ms"] for r in runs]
+    result["step_ms"] = statistics.median(result["step_ms_runs"])
+    result["real_time_factor"] = TIMESTEP * 1000.0 / result["step_ms"]
+    return result
+
+
 def format_result(result: dict[str, Any]) -> str:
     """The human-readable report of one :func:`run` result (lines joined by newlines)."""
+    runs = result.get("step_ms_runs") or [result["step_ms"]]
     lines = [
         f"N={result['n']:>6}: step {result['step_ms']:8.3f} ms  "
         f"RTF {result['real_time_factor']:8.1f}x  spawn {result['spawn_s']:6.3f} s  "
-        f"heap {result['python_heap_kb_per_agent']:5.2f} KB/agent  "
+        f"heap {result['python_heap_kb_per_agent'] or 0.0:5.2f} KB/agent  "
         f"RSS {result['rss_kb_per_agent']:5.2f} KB/agent  collisions {result['collisions']}"
+        + (" (swept)" if result.get("collision_sweep") else "")
     ]
+    if len(runs) > 1:
+        lines.append("    step ms per run: " + ", ".join(f"{ms:.3f}" for ms in runs))
     phases = result.get("phases_ms")
     if phases is not None:
         for key, value in sorted(phases.items(), key=lambda kv: -kv[1]):
@@ -205,11 +234,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--json",
         action="store_true",
-        help="print one JSON object per size (keys: n, step_ms, real_time_factor, spawn_s, "
-        "python_heap_kb_per_agent, rss_kb_per_agent, moving_after, collisions)",
+        help="print one JSON object per size (keys: n, step_ms, step_ms_runs, "
+        "real_time_factor, spawn_s, python_heap_kb_per_agent, rss_kb_per_agent, moving_after, "
+        "collisions, collision_sweep)",
     )
     parser.add_argument(
         "--profile", action="store_true", help="add a per-phase breakdown (ms/step)"
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        metavar="R",
+        help="runs per size, each in a fresh simulation; report the median (default 1)",
+    )
+    parser.add_argument(
+        "--sweep", action="store_true", help="run with collision_sweep=True (swept checks)"
     )
 
 
@@ -220,8 +260,10 @@ def run_from_args(args: argparse.Namespace, out: TextIO | None = None) -> int:
     for n in sizes:
         if n <= 0:
             raise ValueError(f"--n: fleet sizes must be > 0, got {n}")
+    if args.repeat < 1:
+        raise ValueError(f"--repeat: expected a number of runs >= 1, got {args.repeat}")
     for n in sizes:
-        result = run(n, profile=args.profile)
+        result = run_repeated(n, args.repeat, profile=args.profile, sweep=args.sweep)
         print(json.dumps(result) if args.json else format_result(result), file=stream)
         stream.flush()
     return 0

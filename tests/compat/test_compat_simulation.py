@@ -72,6 +72,7 @@ def test_sync_pybullet_every_step_keeps_pybullet_current():
 
 def test_ray_tests_see_poses_written_inside_the_step(sim):
     wall = SimObject.from_mesh(BOX, BOX, Pose.from_xyz(0, 0, 0.1), sim_core=sim)
+    assert wall.body_id >= 0  # its body exists (else the raw call below creates it, up to date)
     hits = {}
 
     def probe(sim, dt):

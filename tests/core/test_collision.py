@@ -7,6 +7,7 @@ import pybullet as p
 import pytest
 
 from fleet_async import (
+    Agent,
     CollisionMode,
     MultiRobotSimulationCore,
     Pose,
@@ -314,3 +315,128 @@ def test_box_fast_path_matches_pybullet_with_sizes_offsets_and_rotations():
                 if p.getClosestPoints(a.body_id, b.body_id, 0.03, physicsClientId=sim.client):
                     expected.append((a.object_id, b.object_id))
         assert pairs == sorted(expected) and len(expected) > 10
+
+
+def _brute_force_pairs(amin, amax, flat, moved):
+    """Every overlapping pair (i < j) with a moved side, by broadcasting (any n)."""
+    out = []
+    for i in range(len(amin) - 1):
+        j = np.arange(i + 1, len(amin))
+        sep = (amin[i] > amax[j]) | (amin[j] > amax[i])
+        sep[:, 2] &= ~(flat[i] | flat[j])
+        hit = j[~sep.any(axis=1) & (moved[i] | moved[j])]
+        out += [(i, int(k)) for k in hit]
+    return out
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_broad_phase_hash_table_path_matches_brute_force(seed):
+    # Enough objects that equal cell keys are found with the hash table, not by sorting, and
+    # crowded enough that many cells hold three or more objects.
+    rng = np.random.default_rng(100 + seed)
+    n = 3000
+    center = rng.uniform(-5, 5, (n, 3)) * [1, 1, 0.05]
+    size = rng.uniform(0.05, 0.3, (n, 3))
+    size[rng.random(n) < 0.01] *= 15
+    amin, amax = center - size, center + size
+    flat = rng.random(n) < (0.25 if seed else 0.0)
+    moved = rng.random(n) < 0.4
+    idx = candidate_pairs(amin, amax, flat if flat.any() else None, moved, 0.6, 1.5)
+    assert len(np.unique(idx, axis=0)) == len(idx)
+    assert (idx[:, 0] < idx[:, 1]).all()
+    ignore_z = flat[idx[:, 0]] | flat[idx[:, 1]]
+    kept = idx[
+        aabb_overlap(amin[idx[:, 0]], amax[idx[:, 0]], amin[idx[:, 1]], amax[idx[:, 1]], ignore_z)
+    ]
+    assert [tuple(x) for x in kept.tolist()] == _brute_force_pairs(amin, amax, flat, moved)
+
+
+def test_one_cell_objects_and_a_quiet_check():
+    # Objects far smaller than the cell (each in exactly one cell), then a check with nothing
+    # moved: no work, the same active pairs, no events.
+    with make_sim(spatial_hash_cell_size_mode="constant", spatial_hash_cell_size=5.0) as sim:
+        objs = [cube(sim, 0.19 * i, y=0.5) for i in range(6)]
+        started = []
+        sim.events.on(SimEvents.COLLISION_STARTED, lambda obj_a, obj_b, **_: started.append(1))
+        sim.step_once()
+        pairs = sim.get_active_collision_pairs()
+        assert pairs == [(objs[i].object_id, objs[i + 1].object_id) for i in range(5)]
+        sim.step_once()
+        assert sim.get_active_collision_pairs() == pairs and len(started) == 5
+
+
+def _head_on(sweep, gap, lane=0.0, shape=None):
+    """Two 0.1 m robots driving at each other at 2 m/s (dt 0.1 s); the collision events."""
+    body = shape or ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
+    with make_sim(collision_sweep=sweep) as sim:
+        ctrl = {"type": "omni", "max_linear_vel": 2.0}
+        a = Agent.from_mesh(body, body, Pose.from_xyz(-gap, 0, 0.1), sim_core=sim, controller=ctrl)
+        b = Agent.from_mesh(
+            body, body, Pose.from_xyz(gap, lane, 0.1), sim_core=sim, controller=ctrl
+        )
+        a.set_goal_pose(Pose.from_xyz(gap + 3, 0, 0.1))
+        b.set_goal_pose(Pose.from_xyz(-gap - 3, lane, 0.1))
+        log = []
+        for event in (SimEvents.COLLISION_STARTED, SimEvents.COLLISION_ENDED):
+            sim.events.on(event, lambda e=event, **_: log.append((e, sim.step_count)))
+        for _ in range(40):
+            sim.step_once()
+        return log
+
+
+@pytest.mark.parametrize("gap", [0.9, 1.3])
+def test_swept_check_reports_robots_that_pass_through_each_other_in_one_step(gap):
+    # At 0.4 m per step of closing speed, neither end pose of the crossing step overlaps.
+    assert _head_on(False, gap) == []
+    started, ended = _head_on(True, gap)
+    assert started[0] == SimEvents.COLLISION_STARTED and ended[0] == SimEvents.COLLISION_ENDED
+    assert ended[1] == started[1] + 1  # reported by the crossing step, ended by the next one
+
+
+def test_swept_check_keeps_near_misses_and_touches_apart():
+    # Parallel lanes: faces pass 0.1 m apart (no contact), then 0.015 m apart (within the
+    # 0.02 m margin: a contact whether or not the check is swept).
+    assert _head_on(True, 0.9, lane=0.2) == []
+    assert [e for e, _ in _head_on(True, 0.9, lane=0.115)] == [
+        SimEvents.COLLISION_STARTED,
+        SimEvents.COLLISION_ENDED,
+    ]
+    # A cube sweeping past another's edge with gaps of g on two axes comes within g * sqrt(2):
+    # 0.014 m gaps (0.0198 m) are within the 0.02 m margin, 0.016 m gaps (0.0226 m) are not,
+    # though each gap alone is (the swept test measures the distance, not the axes).
+    for gap, expected in ((0.016, 0), (0.014, 1)):
+        with make_sim(collision_sweep=True) as sim:
+            cube(sim, 0.0)
+            b = cube(sim, -5.0, y=0.2 + gap, z=0.7 + gap)
+            sim.step_once()
+            b.set_pose(Pose.from_xyz(5.0, 0.2 + gap, 0.7 + gap))
+            sim.step_once()
+            assert sim.collision_count == expected
+
+
+def test_swept_check_of_other_shapes_uses_the_closest_approach():
+    ball = ShapeParams("sphere", radius=0.05)
+    assert _head_on(False, 0.9, shape=ball) == []
+    assert [e for e, _ in _head_on(True, 0.9, shape=ball)] == [
+        SimEvents.COLLISION_STARTED,
+        SimEvents.COLLISION_ENDED,
+    ]
+
+
+def test_swept_box_distance_decision_matches_a_fine_scan():
+    from fleet_async.core.collision.narrowphase import _within
+
+    rng = np.random.default_rng(11)
+    n = 120
+    rel0, move = rng.uniform(-1, 1, (n, 3)), rng.uniform(-2, 2, (n, 3))
+    half = rng.uniform(0.05, 0.3, (n, 3))
+    t = np.linspace(0.0, 1.0, 10001)[:, None]
+    least = np.array(
+        [
+            np.sqrt((np.maximum(np.abs(rel0[i] + t * move[i]) - half[i], 0) ** 2).sum(1)).min()
+            for i in range(n)
+        ]
+    )
+    for margin in (0.02, 0.1, 0.3):
+        clear = np.abs(least - margin) > 3e-4  # rows the scan itself resolves
+        assert (_within(rel0, move, half, margin) == (least <= margin))[clear].all()

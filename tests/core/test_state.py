@@ -61,3 +61,16 @@ def test_allocate_many_and_dirty_rows():
     store.clear()
     assert store.count == 0 and store.live_rows().size == 0
     assert store.nbytes() > 0
+
+
+def test_fresh_rows_hold_defaults_after_growth_and_clear():
+    store = KinematicState(2)
+    for i in range(5):  # grows twice
+        row = store.allocate(i, -1, [i, 0, 0], [0, 0, 0, 1], kinematic=i != 1, collision_code=i % 3)
+        store.velocity[row] = 1.0
+    assert store.kinematic[:5].tolist() == [True, False, True, True, True]
+    assert store.collision_mode[:5].tolist() == [0, 1, 2, 0, 1]
+    store.clear()
+    row = store.allocate(9, -1, [0, 0, 0], [0, 0, 0, 1])
+    assert row == 0 and store.kinematic[0] and store.collision_mode[0] == 0
+    assert not store.velocity[:5].any() and store.kinematic[:5].all()

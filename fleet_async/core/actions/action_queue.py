@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import heapq
+import math
 from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -56,6 +57,23 @@ class ActionQueue:
     def is_idle(self, agent: Agent) -> bool:
         """No current action and nothing queued."""
         return agent.object_id not in self._current and not self._queued.get(agent.object_id)
+
+    def idle_steps(self, step: int, dt: float, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) advance no action: nothing is
+        due to start or be polled, and no timer runs out (step ``j`` ends at ``j * dt + dt``)."""
+        if self._due:
+            return 0
+        if not self._timers:
+            return limit
+        when = self._timers[0][0]
+        j = max(step, math.ceil((when - _EPS) / dt) - 2)
+        while j * dt + dt + _EPS < when:  # first step whose end reaches the timer
+            j += 1
+        return max(0, min(limit, j - step))
+
+    def skip(self, now: float) -> None:
+        """Steps were skipped; the last one would have ticked at sim time ``now``."""
+        self.now = now
 
     # ----- commands -----------------------------------------------------------------------
 

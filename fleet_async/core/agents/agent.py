@@ -24,10 +24,11 @@ from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionMode, MotionMode, coerce_enum
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
-from fleet_async.core.bodies.spawning import create_bodies, create_body, wrap_all
+from fleet_async.core.bodies.spawning import construct, reserve_bodies, reserve_body, wrap_all
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.missions.agent_missions import AgentMissionApi
-from fleet_async.core.motion.controllers import Controller, build_controller_chain
+from fleet_async.core.motion.chain import build_controller_chain
+from fleet_async.core.motion.controllers import Controller
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.motion.joints import JointSet
 
@@ -112,7 +113,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         self._motion_mode = coerce_enum(MotionMode, motion_mode, "motion_mode")
         self.urdf_path = urdf_path
         self.use_fixed_base = bool(use_fixed_base)
-        self._ik_params = ik_params if ik_params is not None else IKParams()
+        self._ik_params = ik_params  # the defaults are made on first use (most agents: never)
         self._joint_tolerance = joint_tolerance
         self._joint_set: JointSet | None = None
         self.path_visualize = False
@@ -162,8 +163,11 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
                 notify_spawn=False,
             )
         else:
-            body = create_body(spawn_params, sim_core)
-            agent = _construct_or_remove_body(cls, sim_core, body, **_mesh_kwargs(spawn_params))
+            body, deferred = reserve_body(spawn_params, sim_core)
+            kwargs = _mesh_kwargs(spawn_params)
+            agent = construct(
+                lambda b: cls(b, sim_core=sim_core, **kwargs), body, deferred, sim_core
+            )
         return cls._finish_spawn(agent, spawn_params, sim_core)
 
     @classmethod
@@ -186,7 +190,8 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     def spawn_batch(  # type: ignore[override]  # takes AgentSpawnParams, as the seed
         cls, params_list: Sequence[AgentSpawnParams], sim_core: MultiRobotSimulationCore
     ) -> list[Agent]:
-        """Spawn many agents fast: shape-based bodies are created in batches.
+        """Spawn many agents fast: shape-based bodies are left pending or created in batches
+        (as ``from_params`` would).
 
         URDF agents are loaded one by one. Input order is kept; if anything fails, nothing
         this call created is left behind.
@@ -194,17 +199,21 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         params_list = list(params_list)
         shaped = [i for i, prm in enumerate(params_list) if prm.kind != "urdf"]
         with sim_core.batch_spawn():
-            bodies = create_bodies([params_list[i] for i in shaped], sim_core)
-            body_of = dict(zip(shaped, bodies, strict=True))
+            reserved = reserve_bodies([params_list[i] for i in shaped], sim_core)
+            body_of = dict(zip(shaped, reserved, strict=True))
 
             def make(i: int, body: int) -> Agent:
                 prm = params_list[i]
                 if prm.kind == "urdf":
                     return cls.from_params(prm, sim_core)
-                agent = cls(body_of[i], sim_core=sim_core, **_mesh_kwargs(prm))
+                kwargs = _mesh_kwargs(prm)
+                agent = construct(
+                    lambda b: cls(b, sim_core=sim_core, **kwargs), body, body_of[i][1], sim_core
+                )
                 return cls._finish_spawn(agent, prm, sim_core)
 
-            return wrap_all([body_of.get(i, -1) for i in range(len(params_list))], make, sim_core)
+            bodies = [body_of[i][0] if i in body_of else -1 for i in range(len(params_list))]
+            return wrap_all(bodies, make, sim_core)
 
     @classmethod
     def from_mesh(  # type: ignore[override]  # the seed's agent parameters, not SimObject's
@@ -266,8 +275,15 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         client = 0 if sim_core is None else sim_core.client
         pos, orn = pose.as_position_orientation()
         try:
+            # Cached graphics shapes: loading one model many times re-uses its visual
+            # shapes instead of parsing them again (half the cost of each load).
             body = p.loadURDF(
-                path, pos, orn, useFixedBase=bool(use_fixed_base), physicsClientId=client
+                path,
+                pos,
+                orn,
+                useFixedBase=bool(use_fixed_base),
+                flags=p.URDF_ENABLE_CACHED_GRAPHICS_SHAPES,
+                physicsClientId=client,
             )
         except p.error as exc:
             raise ValueError(f"urdf_path {path!r}: PyBullet could not load it ({exc})") from exc
@@ -330,6 +346,10 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     def plugins(self) -> list[AgentPlugin]:
         """Per-agent plugins, in the order added."""
         return list(self._plugins)
+
+    def has_plugins(self) -> bool:
+        """Whether any per-agent plugin is attached."""
+        return bool(self._plugins)
 
     def add_plugin(self, plugin: AgentPlugin) -> None:
         """Attach a plugin built for this agent.

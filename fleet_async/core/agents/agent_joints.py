@@ -47,7 +47,7 @@ class AgentJointsApi:
     body_id: int
     urdf_path: str | None
     sim_core: MultiRobotSimulationCore | None
-    _ik_params: IKParams
+    _ik_params: IKParams | None
     _joint_tolerance: ToleranceSpec
     _joint_set: JointSet | None
 
@@ -99,7 +99,9 @@ class AgentJointsApi:
 
     @property
     def ik_params(self) -> IKParams:
-        """IK solver settings."""
+        """IK solver settings (the defaults unless given at spawn)."""
+        if self._ik_params is None:
+            self._ik_params = IKParams()
         return self._ik_params
 
     @property
@@ -323,7 +325,7 @@ class AgentJointsApi:
         """
         reach = self.ik_reach(target_position, target_orientation, end_effector_link)
         self._apply_targets(reach.targets, max_force)
-        limit = self._ik_params.reachability_tolerance if tolerance is None else float(tolerance)
+        limit = self.ik_params.reachability_tolerance if tolerance is None else float(tolerance)
         return reach.position_error <= limit
 
     def ik_reach(
@@ -342,7 +344,7 @@ class AgentJointsApi:
         )
         ee = self.resolve_end_effector(end_effector_link)
         sim.world.sync_object(self._agent)
-        return solve_ik(self.joints, ee, position, orientation, self._ik_params)
+        return solve_ik(self.joints, ee, position, orientation, self.ik_params)
 
     def are_ee_at_target(
         self,

@@ -88,7 +88,7 @@ class AgentMotionApi:
         if sim is not None and isinstance(base, KinematicController) and base.vectorized:
             self._slot = sim.fleet.add_slot(self._agent, base.kind)
         for ctrl in chain:
-            if not any(ctrl is c for c in old):
+            if not old or not any(ctrl is c for c in old):
                 ctrl.on_install(self._agent)
         if sim is not None:
             sim.fleet.track(self._agent)

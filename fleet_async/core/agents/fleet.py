@@ -14,10 +14,11 @@ Agents without high-level controllers or plugins cost nothing in steps 2 and 4.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.actions.action_queue import ActionQueue
 from fleet_async.core.motion.kinematics import KinematicEngine
+from fleet_async.core.motion.segments import MotionLimits
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -36,11 +37,22 @@ class FleetMotion:
         self._slot_agent: dict[int, Agent] = {}
         self._controlled: dict[int, Agent] = {}
         self._plugged: dict[int, Agent] = {}
+        self._limits: dict[tuple[Any, ...], MotionLimits] = {}
         self._dt = sim.params.timestep
 
     def add_slot(self, agent: Agent, kind: int) -> int:
         """Give ``agent`` an engine slot; return it."""
-        slot = self.engine.add(agent.state_row, kind, agent.controller_params.limits())
+        params = agent.controller_params
+        key = (
+            params.max_linear_vel,
+            params.max_linear_accel,
+            params.max_angular_vel,
+            params.max_angular_accel,
+        )
+        limits = self._limits.get(key)
+        if limits is None:  # MotionLimits is frozen: agents with equal limits share one
+            limits = self._limits[key] = params.limits()
+        slot = self.engine.add(agent.state_row, kind, limits)
         self._slot_agent[slot] = agent
         return slot
 
@@ -52,14 +64,14 @@ class FleetMotion:
     def track(self, agent: Agent) -> None:
         """Re-read whether ``agent`` needs per-agent controller or plugin calls each step."""
         key = agent.object_id
-        for registry, needed in (
-            (self._controlled, agent.has_stepped_controllers()),
-            (self._plugged, bool(agent.plugins)),
-        ):
-            if needed:
-                registry[key] = agent
-            else:
-                registry.pop(key, None)
+        if agent.has_stepped_controllers():
+            self._controlled[key] = agent
+        elif key in self._controlled:
+            del self._controlled[key]
+        if agent.has_plugins():
+            self._plugged[key] = agent
+        elif key in self._plugged:
+            del self._plugged[key]
 
     def forget(self, agent: Agent) -> None:
         """Drop everything held for ``agent`` (it left the simulation)."""
@@ -81,11 +93,23 @@ class FleetMotion:
         self.actions.tick(self._sim.sim_time, dt)
         for agent in tuple(self._controlled.values()):
             agent.step_controllers(dt)
-        self.engine.advance(dt)
+        if not self.engine.is_idle():  # an idle fleet's step costs no array work
+            self.engine.advance(dt)
         for agent in tuple(self._plugged.values()):
             agent.step_plugins(dt)
         # Last: a wait that ends with this step has covered all of it (a charge charged).
         self.actions.expire(self._sim.sim_time + dt, dt)
+
+    def idle_steps(self, step: int, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) change no agent: nothing moves,
+        no per-agent controller or plugin runs, and no action is due (see ActionQueue)."""
+        if self._controlled or self._plugged or not self.engine.is_idle():
+            return 0
+        return self.actions.idle_steps(step, self._sim.params.timestep, limit)
+
+    def skip(self, last_step: int) -> None:
+        """Steps up to ``last_step`` were skipped as empty."""
+        self.actions.skip(last_step * self._sim.params.timestep)
 
     def motion_ended(self, agent: Agent, reached: bool) -> None:
         """Record that ``agent`` stopped and wake an action waiting for it.

@@ -38,6 +38,9 @@ class SimEvents:
     POST_STEP = "post_step"
     """End of ``step_once``, after the clock advanced; same payload as PRE_STEP (``step`` and
     ``sim_time`` are the new ones)."""
+    STEPS_SKIPPED = "steps_skipped"
+    """``sim.skip_steps(n)`` advanced the clock over ``n`` empty steps; payload ``sim``,
+    ``step`` (the first skipped step), ``count`` (n), ``sim_time`` (after the span)."""
     PAUSED = "paused"
     """``sim.pause()``; payload ``sim``."""
     RESUMED = "resumed"

@@ -126,3 +126,22 @@ class PeriodicSchedule:
                 entry.count = math.floor((now + _EPS) / entry.period)
                 entry.last_time = now
         return out
+
+    def steps_until_due(self, step: int, timestep: float, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) run before an entry is due.
+
+        Step ``j`` runs at sim time ``j * timestep``; an every-step entry is due at once. The
+        test is the one :meth:`due` applies, so the answer is exact, not an estimate.
+        """
+        free = limit
+        for entry in self._entries:
+            if entry.period is None:
+                return 0
+            boundary = (entry.count + 1) * entry.period
+            j = max(step, math.ceil((boundary - _EPS) / timestep) - 1)
+            while j * timestep + _EPS < boundary:  # first step at or after the boundary
+                j += 1
+            free = min(free, j - step)
+            if free <= 0:
+                return 0
+        return free

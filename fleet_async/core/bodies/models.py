@@ -19,6 +19,7 @@ the defaults.
 from __future__ import annotations
 
 import difflib
+import functools
 from pathlib import Path as FsPath
 
 import pybullet_data
@@ -67,12 +68,19 @@ _user_search_paths: list[str] = []
 _user_models: dict[str, str] = {}
 
 
+@functools.cache
+def _pybullet_data_dir() -> str:
+    return str(FsPath(pybullet_data.getDataPath()).resolve())
+
+
 def _builtin_search_paths() -> list[str]:
-    return [PROJECT_ROBOTS_DIR, str(FsPath(pybullet_data.getDataPath()).resolve())]
+    return [PROJECT_ROBOTS_DIR, _pybullet_data_dir()]
 
 
-def _known_models() -> dict[str, str]:
-    """Every known name -> absolute file; user aliases shadow built-in names."""
+@functools.cache
+def _builtin_models() -> dict[str, str]:
+    """Built-in name -> absolute file, for the files installed (read once: a loop of spawns
+    by model name must not stat every model each time)."""
     models: dict[str, str] = {}
     for base, table in (
         (pybullet_data.getDataPath(), _PYBULLET_MODELS),
@@ -82,6 +90,12 @@ def _known_models() -> dict[str, str]:
             candidate = FsPath(base) / relative
             if candidate.is_file():
                 models[name] = str(candidate.resolve())
+    return models
+
+
+def _known_models() -> dict[str, str]:
+    """Every known name -> absolute file; user aliases shadow built-in names."""
+    models = dict(_builtin_models())
     models.update(_user_models)
     return models
 

@@ -55,3 +55,7 @@ class ObjectCallbacks:
     def reset_callbacks(self) -> None:
         """Restart the callback schedule from sim time 0."""
         self._callbacks.reset()
+
+    def callback_steps_until_due(self, step: int, timestep: float, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) run before a callback is due."""
+        return self._callbacks.steps_until_due(step, timestep, limit)

@@ -21,20 +21,16 @@ from fleet_async.core.base.events import EventBus
 from fleet_async.core.base.logging_utils import NamedLazyLogger
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.base.types import CollisionMode, coerce_enum
+from fleet_async.core.bodies.constructors import SimObjectConstructors
 from fleet_async.core.bodies.object_callbacks import ObjectCallbacks
 from fleet_async.core.bodies.removal import ObjectRemovedError, RemovedState, removed_message
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
-from fleet_async.core.bodies.spawning import (
-    create_bodies,
-    create_body,
-    load_sdf_objects,
-    wrap_all,
-)
 from fleet_async.core.bodies.standalone import StandaloneState, read_standalone_mass
 from fleet_async.core.geometry.approach import find_nearest
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.vectors import as_orientation, as_position
-from fleet_async.core.world.shapes import ShapeParams, get_or_create_shapes
+from fleet_async.core.world.pending import PENDING_BODY
+from fleet_async.core.world.shapes import ShapeParams
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
@@ -43,7 +39,7 @@ if TYPE_CHECKING:
 __all__ = ["ObjectRemovedError", "ShapeParams", "SimObject", "SimObjectSpawnParams"]
 
 
-class SimObject(ObjectCallbacks):
+class SimObject(ObjectCallbacks, SimObjectConstructors):
     """A body in the simulation: robot, pallet, shelf or marker.
 
     Args:
@@ -70,6 +66,7 @@ class SimObject(ObjectCallbacks):
     is_agent: ClassVar[bool] = False
     """Whether the simulation lists objects of this class in ``sim.agents``."""
     _store: KinematicState
+    _logger: NamedLazyLogger | None = None
 
     def __init__(
         self,
@@ -83,7 +80,7 @@ class SimObject(ObjectCallbacks):
         *,
         register: bool = True,
     ) -> None:
-        self.body_id = int(body_id)
+        self._body_id = int(body_id)
         self.object_id = -1
         self.name = name
         self.pickable = bool(pickable)
@@ -92,7 +89,6 @@ class SimObject(ObjectCallbacks):
         self._collision_mode = coerce_enum(CollisionMode, collision_mode, "collision_mode")
         self._events: EventBus | None = None
         self._callbacks = PeriodicSchedule()
-        self._log = NamedLazyLogger(__name__)
         self._row = -1  # no row until bound to a simulation or given a standalone store
         self._removed: str | None = None  # why using the object fails once it left its sim
         self._solo: StandaloneState | None = None
@@ -104,13 +100,41 @@ class SimObject(ObjectCallbacks):
         else:
             self.mass = float(mass) if mass is not None else read_standalone_mass(self.body_id)
             self._go_standalone(None)
-        self._refresh_log_prefix()
 
     def __repr__(self) -> str:
         return (
             f"{type(self).__name__}(object_id={self.object_id}, name={self.name!r}, "
-            f"body_id={self.body_id})"
+            f"body_id={self._body_id})"
         )
+
+    # ----- the PyBullet body --------------------------------------------------------------
+
+    @property
+    def body_id(self) -> int:
+        """PyBullet body unique id (-1 for none), ready for raw ``pybullet`` calls: a body
+        still pending is created first, and PyBullet's client-side body list is brought up to
+        date if bodies were created in batches since (so ``getBodyInfo`` works)."""
+        sim = self.sim_core
+        if sim is not None:
+            world = sim.world
+            if self._body_id == PENDING_BODY:
+                world.create_pending_bodies()
+            world.sync_body_list()
+        return self._body_id
+
+    @body_id.setter
+    def body_id(self, value: int) -> None:
+        self._body_id = int(value)
+
+    @property
+    def raw_body_id(self) -> int:
+        """The body id without creating a pending body: ``PENDING_BODY`` (-2) while the body
+        waits to be created with others (see ``world/pending.py``)."""
+        return self._body_id
+
+    def bind_body(self, body_id: int) -> None:
+        """Take the PyBullet body created for this object. Called by the world; not for users."""
+        self._body_id = int(body_id)
 
     # ----- binding to a simulation (called by MultiRobotSimulationCore) -------------------
 
@@ -124,13 +148,16 @@ class SimObject(ObjectCallbacks):
         self._solo = None
         self._removed = None
         self.object_id = object_id
-        self._refresh_log_prefix()
+        if self._logger is not None:
+            self._refresh_log_prefix()
 
     def on_removed(self) -> None:
         """Called by the simulation just before the object leaves it (subclass hook)."""
 
     def unbind(self) -> None:
         """Leave the simulation; from now on using the object raises ObjectRemovedError."""
+        if self._body_id == PENDING_BODY:
+            self._body_id = -1  # left before its body was made: it never will be
         self._removed = removed_message(self, self.sim_core)
         self._store = cast("KinematicState", RemovedState(self._removed))
         self._row = self.object_id = -1
@@ -167,6 +194,8 @@ class SimObject(ObjectCallbacks):
         """Per-entity event bus, created on first access."""
         if self._events is None:
             self._events = EventBus(on_change=self._on_handlers_changed)
+            if self.sim_core is not None:
+                self.sim_core.world.on_event_bus_created()
         return self._events
 
     def _on_handlers_changed(self, event: str) -> None:
@@ -202,8 +231,7 @@ class SimObject(ObjectCallbacks):
         if mode is self._collision_mode:
             return
         old, self._collision_mode = self._collision_mode, mode
-        self._store.collision_mode[self._row] = COLLISION_CODES[mode.value]
-        self._store.moved[self._row] = True
+        self._store.set_collision_code(self._row, COLLISION_CODES[mode.value])
         if self.sim_core is not None:
             self.sim_core.world.on_collision_mode_changed(self, old, mode)
 
@@ -369,131 +397,22 @@ class SimObject(ObjectCallbacks):
         every step; objects that do not cost nothing)."""
         return type(self).update is not SimObject.update
 
-    # ----- constructors -------------------------------------------------------------------
-
-    @classmethod
-    def create_shared_shapes(
-        cls,
-        visual_shape: ShapeParams | None = None,
-        collision_shape: ShapeParams | None = None,
-        physics_client_id: int = 0,
-    ) -> tuple[int, int]:
-        """Return (visual_id, collision_id), reusing shapes with identical parameters."""
-        return get_or_create_shapes(visual_shape, collision_shape, physics_client_id)
-
-    @classmethod
-    def from_params(
-        cls, spawn_params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None = None
-    ) -> SimObject:
-        """Create the body described by ``spawn_params`` and wrap it.
-
-        Raises:
-            FileNotFoundError: for a mesh file that does not exist.
-            ValueError: for shapes PyBullet rejects.
-        """
-        body_id = create_body(spawn_params, sim_core)
-        return cls(
-            body_id,
-            sim_core=sim_core,
-            pickable=spawn_params.pickable,
-            mass=spawn_params.mass,
-            collision_mode=spawn_params.collision_mode,
-            name=spawn_params.name,
-            user_data=dict(spawn_params.user_data),
-        )
-
-    @classmethod
-    def spawn_batch(
-        cls, params_list: Sequence[SimObjectSpawnParams], sim_core: MultiRobotSimulationCore
-    ) -> list[SimObject]:
-        """Spawn many shape-based objects fast (bodies created in batches); input order kept.
-
-        If anything fails, nothing this call created is left behind.
-        """
-        params_list = list(params_list)
-        with sim_core.batch_spawn():
-            bodies = create_bodies(params_list, sim_core)
-            return wrap_all(
-                bodies,
-                lambda i, body: cls(
-                    body,
-                    sim_core=sim_core,
-                    pickable=params_list[i].pickable,
-                    mass=params_list[i].mass,
-                    collision_mode=params_list[i].collision_mode,
-                    name=params_list[i].name,
-                    user_data=dict(params_list[i].user_data),
-                ),
-                sim_core,
-            )
-
-    @classmethod
-    def from_mesh(
-        cls,
-        visual_shape: ShapeParams | None = None,
-        collision_shape: ShapeParams | None = None,
-        pose: Pose | None = None,
-        mass: float = 0.0,
-        pickable: bool = True,
-        sim_core: MultiRobotSimulationCore | None = None,
-        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        name: str | None = None,
-        user_data: dict[str, Any] | None = None,
-    ) -> SimObject:
-        """Create an object from visual and collision shapes (box, sphere, cylinder or mesh)."""
-        params = SimObjectSpawnParams(
-            visual_shape=visual_shape,
-            collision_shape=collision_shape,
-            initial_pose=pose if pose is not None else Pose([0.0, 0.0, 0.0]),
-            mass=mass,
-            pickable=pickable,
-            name=name,
-            collision_mode=collision_mode,  # type: ignore[arg-type]  # coerced in __post_init__
-            user_data=user_data or {},
-        )
-        return cls.from_params(params, sim_core)
-
-    @classmethod
-    def from_dict(
-        cls, config: dict[str, Any], sim_core: MultiRobotSimulationCore | None = None
-    ) -> SimObject:
-        """``from_params(_spawn_params_cls.from_dict(config))`` in one call."""
-        return cls.from_params(cls._spawn_params_cls.from_dict(config), sim_core)
-
-    @classmethod
-    def from_sdf(
-        cls,
-        sdf_path: str,
-        sim_core: MultiRobotSimulationCore | None = None,
-        collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        global_scaling: float = 1.0,
-        name_prefix: str | None = None,
-        pickable: bool = False,
-        use_fixed_base: bool = True,
-    ) -> list[SimObject]:
-        """Load every body of an SDF file (``pybullet.loadSDF``) and wrap each one.
-
-        Raises:
-            FileNotFoundError: naming the paths tried when the file does not exist.
-            ValueError: if PyBullet cannot parse the file.
-        """
-        return load_sdf_objects(
-            cls,
-            sdf_path,
-            sim_core,
-            collision_mode,
-            global_scaling,
-            name_prefix,
-            pickable,
-            use_fixed_base,
-        )
-
     def _require_sim(self, what: str) -> MultiRobotSimulationCore:
         self.check_not_removed(what)
         if self.sim_core is None:
             raise ValueError(f"{what}: {self!r} is not part of a simulation")
         return self.sim_core
 
+    @property
+    def _log(self) -> NamedLazyLogger:
+        """This object's logger (made on first use: most objects never log)."""
+        if self._logger is None:
+            self._logger = NamedLazyLogger(__name__)
+            self._refresh_log_prefix()
+        return self._logger
+
     def _refresh_log_prefix(self) -> None:
+        if self._logger is None:
+            return
         label = f"{self.object_id}:{self.name}" if self.name else str(self.object_id)
-        self._log.set_prefix(f"[{type(self).__name__}:{label}] ")
+        self._logger.set_prefix(f"[{type(self).__name__}:{label}] ")

@@ -50,36 +50,49 @@ class SimObjectSpawnParams:
     agents' configs may leave it out)."""
 
     def __post_init__(self) -> None:
+        # Spawning loops build one of these per object: the common, already-typed values pass
+        # with a type check each; anything else goes through the converting checks.
         cls_name = type(self).__name__
         for name in ("visual_shape", "collision_shape"):
             value = getattr(self, name)
+            if value is None or type(value) is ShapeParams:
+                continue
             if isinstance(value, dict):
                 setattr(self, name, ShapeParams.from_dict(value))
-            elif value is not None and not isinstance(value, ShapeParams):
+            elif not isinstance(value, ShapeParams):
                 raise ValueError(
                     f"{cls_name}.{name}: expected ShapeParams, a mapping or None, got {value!r}"
                 )
-        for name in ("initial_pose", "visual_frame_pose", "collision_frame_pose"):
-            value = getattr(self, name)
-            if value is not None and not isinstance(value, Pose):
-                setattr(self, name, pose_from_config(value, field_name=f"{cls_name}.{name}"))
-        if self.initial_pose is None:
-            raise ValueError(f"{cls_name}.initial_pose: expected a Pose, got None")
-        mass = self.mass
         if (
-            isinstance(mass, bool)
-            or not isinstance(mass, (int, float))
-            or not math.isfinite(mass)
-            or mass < 0
+            type(self.initial_pose) is not Pose
+            or self.visual_frame_pose is not None
+            or (self.collision_frame_pose is not None)
         ):
-            raise ValueError(f"{cls_name}.mass: expected a finite number >= 0 (kg), got {mass!r}")
-        self.mass = float(mass)
-        self.collision_mode = coerce_enum(
-            CollisionMode, self.collision_mode, f"{cls_name}.collision_mode"
-        )
+            for name in ("initial_pose", "visual_frame_pose", "collision_frame_pose"):
+                value = getattr(self, name)
+                if value is not None and not isinstance(value, Pose):
+                    setattr(self, name, pose_from_config(value, field_name=f"{cls_name}.{name}"))
+            if self.initial_pose is None:
+                raise ValueError(f"{cls_name}.initial_pose: expected a Pose, got None")
+        mass = self.mass
+        if type(mass) is not float or not (0.0 <= mass < math.inf):
+            if (
+                isinstance(mass, bool)
+                or not isinstance(mass, (int, float))
+                or not math.isfinite(mass)
+                or mass < 0
+            ):
+                raise ValueError(
+                    f"{cls_name}.mass: expected a finite number >= 0 (kg), got {mass!r}"
+                )
+            self.mass = float(mass)
+        if type(self.collision_mode) is not CollisionMode:
+            self.collision_mode = coerce_enum(
+                CollisionMode, self.collision_mode, f"{cls_name}.collision_mode"
+            )
         if self.name is not None and not isinstance(self.name, str):
             raise ValueError(f"{cls_name}.name: expected a string or None, got {self.name!r}")
-        if not isinstance(self.user_data, dict):
+        if type(self.user_data) is not dict and not isinstance(self.user_data, dict):
             raise ValueError(f"{cls_name}.user_data: expected a mapping, got {self.user_data!r}")
 
     @classmethod

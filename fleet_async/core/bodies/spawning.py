@@ -1,6 +1,9 @@
 """Creating the PyBullet bodies of spawn parameters: one at a time, or many at once.
 
-``create_body`` makes one multibody from a SimObjectSpawnParams. ``create_bodies`` makes many:
+``create_body`` makes one multibody from a SimObjectSpawnParams. ``reserve_body`` is what
+``from_params`` uses: on a headless simulation a kinematic body is not made at once but left
+pending, and the world creates every pending body of the same shapes in one batch call later
+(``world/pending.py``); ``construct`` builds the handle around either. ``create_bodies`` makes many:
 PyBullet creates a whole group of identical bodies in one ``createMultiBody(batchPositions=)``
 call, about ten times faster per body than one call each at fleet sizes, so spawn parameters
 are grouped by their shapes and mass and each group is created in one call; ``wrap_all`` then
@@ -20,6 +23,7 @@ import pybullet as p
 
 from fleet_async.core.base.paths import resolve_data_file
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.world.pending import PENDING_BODY, Deferred, PendingBody
 from fleet_async.core.world.shapes import get_or_create_shapes, record_body_shape
 
 if TYPE_CHECKING:
@@ -27,7 +31,17 @@ if TYPE_CHECKING:
     from fleet_async.core.bodies.sim_object import SimObject
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["create_bodies", "create_body", "load_sdf_objects", "wrap_all"]
+__all__ = [
+    "Deferred",
+    "construct",
+    "create_bodies",
+    "create_body",
+    "load_sdf_objects",
+    "reserve_bodies",
+    "reserve_body",
+    "wrap_all",
+]
+
 
 T = TypeVar("T", bound="SimObject")
 
@@ -42,7 +56,75 @@ def _shape_ids(params: SimObjectSpawnParams, sim: MultiRobotSimulationCore) -> t
         visual = dataclasses.replace(visual, frame_pose=params.visual_frame_pose)
     if collision is not None and params.collision_frame_pose is not None:
         collision = dataclasses.replace(collision, frame_pose=params.collision_frame_pose)
-    return get_or_create_shapes(visual, collision, sim.client, list(sim.params.model_paths or []))
+    paths = sim.params.model_paths
+    return get_or_create_shapes(visual, collision, sim.world.client, list(paths) if paths else [])
+
+
+def reserve_body(
+    params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None
+) -> tuple[int, Deferred | None]:
+    """A body for ``params``: ``(body_id, None)`` when made now, ``(PENDING_BODY, deferred)``
+    when the world will make it with others.
+
+    Bodies are left pending on a headless simulation when they are kinematic (physics off or
+    mass 0); with a GUI, with dynamics or without a simulation they are made at once.
+
+    Raises:
+        FileNotFoundError / ValueError: for bad shapes, at once either way.
+    """
+    if sim_core is None or sim_core.is_gui or (sim_core.params.physics and params.mass > 0):
+        return create_body(params, sim_core), None
+    visual_id, collision_id = _shape_ids(params, sim_core)
+    pose = params.initial_pose
+    return PENDING_BODY, (
+        PendingBody(visual_id, collision_id, params.mass),
+        pose.position,
+        pose.orientation,
+    )
+
+
+def construct(
+    make: Callable[[int], T],
+    body: int,
+    deferred: Deferred | None,
+    sim_core: MultiRobotSimulationCore | None,
+) -> T:
+    """``make(body)`` for a body from :func:`reserve_body`; a body made for it is removed if
+    that fails."""
+    if deferred is not None and sim_core is not None:
+        world = sim_core.world
+        world.expect_pending(deferred)
+        try:
+            return make(body)
+        finally:
+            world.expect_pending(None)
+    try:
+        return make(body)
+    except Exception:
+        if body >= 0:
+            p.removeBody(body, physicsClientId=0 if sim_core is None else sim_core.client)
+        raise
+
+
+def reserve_bodies(
+    params_list: Sequence[SimObjectSpawnParams], sim: MultiRobotSimulationCore
+) -> list[tuple[int, Deferred | None]]:
+    """:func:`reserve_body` for many: bodies that can wait are left pending, the others are
+    created now in batches (:func:`create_bodies`). Input order kept.
+
+    Raises:
+        FileNotFoundError / ValueError: for bad shapes, before any body is created.
+    """
+    out: list[tuple[int, Deferred | None]] = [(-1, None)] * len(params_list)
+    now = []
+    for i, params in enumerate(params_list):
+        if sim.is_gui or (sim.params.physics and params.mass > 0):
+            now.append(i)
+        else:
+            out[i] = reserve_body(params, sim)
+    for i, body in zip(now, create_bodies([params_list[i] for i in now], sim), strict=True):
+        out[i] = (body, None)
+    return out
 
 
 def create_bodies(

@@ -1,10 +1,15 @@
-"""Broad-phase collision culling on arrays: a vectorised spatial hash.
+"""Broad-phase collision culling on arrays: a vectorised spatial hash without a sort.
 
-Every object is inserted into each grid cell its AABB overlaps; two objects are candidates
-when they share a cell. Objects much larger than a cell (more than ``multi_cell_threshold``
-cells along an axis) would flood the hash, so they are kept aside and tested against every
-object by AABB instead. No Python loop runs over objects: the loops below run over the size
-of the largest cell, which is small for any sensible cell size.
+Every object is entered into each grid cell its AABB overlaps; two objects are candidates when
+they share a cell. Finding the shared cells does not sort the N entries: each entry's cell key
+is hashed to a slot of a table about twice the number of entries, every entry writes its index
+into its slot, and an entry that reads back another's index shares its slot with it. Only the
+few entries in shared slots (a slot collision of two different cells is harmless: equal keys
+decide) are sorted and paired. The work is O(N) numpy passes, so 100,000 objects cost about
+ten times 10,000.
+
+Objects much larger than a cell (more than ``multi_cell_threshold`` cells along an axis) would
+flood the hash, so they are kept aside and tested against every object by AABB instead.
 """
 
 from __future__ import annotations
@@ -13,10 +18,14 @@ import numpy as np
 
 __all__ = ["aabb_overlap", "auto_cell_size", "candidate_pairs"]
 
-# Cell coordinates are packed into one int64 key: 21 bits per axis, offset to be non-negative.
+# Cell coordinates are packed into one int64 key, 21 bits per axis (see ``_entries``).
 _BITS = 21
-_OFFSET = 1 << (_BITS - 1)
-_MASK = (1 << _BITS) - 1
+_WEIGHTS = np.array([1 << (2 * _BITS), 1 << _BITS, 1], dtype=np.int64)
+# Fibonacci hashing: multiply by 2**64 / golden ratio, keep the top bits.
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_EMPTY = np.empty((0, 2), dtype=np.int64)
+# Up to this many entries a sort finds equal keys faster than the hash table (measured).
+_SORT_MAX = 6000
 
 
 def auto_cell_size(aabb_min: np.ndarray, aabb_max: np.ndarray) -> float:
@@ -32,11 +41,6 @@ def auto_cell_size(aabb_min: np.ndarray, aabb_max: np.ndarray) -> float:
     return size if size > 1e-9 else 1.0
 
 
-def _keys(cells: np.ndarray) -> np.ndarray:
-    c = (cells.astype(np.int64) + _OFFSET) & _MASK
-    return (c[:, 0] << (2 * _BITS)) | (c[:, 1] << _BITS) | c[:, 2]
-
-
 def aabb_overlap(
     amin: np.ndarray, amax: np.ndarray, bmin: np.ndarray, bmax: np.ndarray, ignore_z: np.ndarray
 ) -> np.ndarray:
@@ -49,7 +53,7 @@ def aabb_overlap(
 def candidate_pairs(
     aabb_min: np.ndarray,
     aabb_max: np.ndarray,
-    flat: np.ndarray,
+    flat: np.ndarray | None,
     moved: np.ndarray,
     cell_size: float,
     multi_cell_threshold: float,
@@ -59,92 +63,187 @@ def candidate_pairs(
     Args:
         aabb_min: (N, 3) AABB minima of the objects taking part.
         aabb_max: (N, 3) AABB maxima.
-        flat: (N,) bool; NORMAL_2D objects: any pair with one of them ignores Z.
+        flat: (N,) bool, or None for none; NORMAL_2D objects: any pair with one of them
+            ignores Z.
         moved: (N,) bool; pairs where neither moved are left out.
         cell_size: Edge of a hash cell, metres.
         multi_cell_threshold: Objects spanning more cells than this along an axis are
             tested against everything instead of being hashed.
 
     Returns:
-        (K, 2) int64 array of unique pairs, rows sorted, ``i < j`` in each.
+        (K, 2) int64 array of unique pairs in ascending order, ``i < j`` in each.
     """
     n = len(aabb_min)
-    if n < 2 or not moved.any():
-        return np.empty((0, 2), dtype=np.int64)
-    lo = np.floor(aabb_min / cell_size).astype(np.int64)
-    span = np.floor(aabb_max / cell_size).astype(np.int64) - lo + 1
-    any_flat = bool(flat.any())
-    if any_flat:
+    if n < 2 or not np.count_nonzero(moved):
+        return _EMPTY
+    inv = 1.0 / cell_size
+    lo = np.floor(aabb_min * inv).astype(np.int64)
+    span = np.floor(aabb_max * inv).astype(np.int64) - lo  # cells spanned - 1, per axis
+    if flat is None and not np.count_nonzero(span):  # common case: every object in one cell
+        return _sorted_unique(_shared_cell_pairs(lo @ _WEIGHTS, None, moved), n, False)
+    if flat is not None:
         # A pair with a NORMAL_2D side ignores Z, so those pairs come from a second hash with
         # Z collapsed; pairs of two 3D objects come from the full 3D hash.
         span_xy = span.copy()
-        span_xy[:, 2] = 1
-        big = np.where(flat[:, None], span_xy, span).max(axis=1) > multi_cell_threshold + 1
+        span_xy[:, 2] = 0
+        big = _max3(np.where(flat[:, None], span_xy, span)) > multi_cell_threshold
+        any_big = bool(big.any())
     else:
-        big = span.max(axis=1) > multi_cell_threshold + 1
-    any_big = bool(big.any())
-    hashed = ~big & ~flat if any_big or any_flat else None
-    pairs = [_hashed_pairs(lo, span, hashed, moved)]
-    if any_flat:
+        any_big = span.max() > multi_cell_threshold
+        big = _max3(span) > multi_cell_threshold if any_big else np.zeros(n, dtype=bool)
+    hashed = ~big & ~flat if flat is not None else (~big if any_big else None)
+    pairs = [_shared_cell_pairs(*_entries(lo, span, hashed), moved)]
+    if flat is not None:
         lo_xy = lo.copy()
         lo_xy[:, 2] = 0
-        xy = _hashed_pairs(lo_xy, span_xy, ~big, moved)
+        xy = _shared_cell_pairs(*_entries(lo_xy, span_xy, ~big), moved)
         pairs.append(xy[flat[xy[:, 0]] | flat[xy[:, 1]]])
     if any_big:
-        big_idx = np.flatnonzero(big)
+        big_idx = big.nonzero()[0]
         a = np.repeat(big_idx, n)
         b = np.tile(np.arange(n), len(big_idx))
         keep = (a != b) & (moved[a] | moved[b])
-        pairs.append(np.stack([a[keep], b[keep]], axis=1))
+        pairs.append(_pairs(a[keep], b[keep]))
     out = np.concatenate(pairs) if len(pairs) > 1 else pairs[0]
-    if len(out) == 0:
-        return out
-    first = np.minimum(out[:, 0], out[:, 1])
-    second = np.maximum(out[:, 0], out[:, 1])
-    code = np.unique(first * n + second)
-    return np.stack([code // n, code % n], axis=1)
+    return _sorted_unique(out, n, True)
 
 
-def _hashed_pairs(
-    lo: np.ndarray, span: np.ndarray, members: np.ndarray | None, moved: np.ndarray
-) -> np.ndarray:
-    """Pairs among ``members`` (a mask; None = all) sharing a cell, each with a moved object.
+def _sorted_unique(pairs: np.ndarray, n: int, may_repeat: bool) -> np.ndarray:
+    """Pairs as (min, max), in ascending order, repeats dropped when there may be some."""
+    if len(pairs) <= 16:  # a few pairs: plain Python is quicker than eight numpy calls
+        if len(pairs) == 0:
+            return _EMPTY
+        out = sorted({(a, b) if a < b else (b, a) for a, b in pairs.tolist()})
+        return np.array(out, dtype=np.int64)
+    first = np.minimum(pairs[:, 0], pairs[:, 1])
+    second = np.maximum(pairs[:, 0], pairs[:, 1])
+    code = np.sort(first * n + second)
+    if may_repeat and len(code) > 1:
+        code = code[np.concatenate(([True], code[1:] != code[:-1]))]
+    return _pairs(code // n, code % n)
 
-    Every object is entered once per cell it overlaps; entries are sorted by cell key, and
-    each moved object's entries look up the run of equal keys with ``searchsorted``. Pairs
-    come out unordered and possibly repeated (the caller dedupes).
+
+def _pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(K, 2) int64 array of the pairs (a[k], b[k]) (cheaper than ``np.stack``)."""
+    out = np.empty((len(a), 2), dtype=np.int64)
+    out[:, 0] = a
+    out[:, 1] = b
+    return out
+
+
+def _max3(a: np.ndarray) -> np.ndarray:
+    """Row-wise maximum of an (N, 3) array (faster than ``max(axis=1)`` on narrow rows)."""
+    return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
+
+
+def _entries(
+    lo: np.ndarray, span: np.ndarray, members: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """(cell key, owner) of every hash entry: one per cell each member overlaps.
+
+    Keys are ``x * 2**42 + y * 2**21 + z`` of the cell coordinates, distinct for coordinates
+    within +-2**20 cells (farther cells may share keys: extra candidates, which the AABB test
+    drops). ``members`` None means all objects; ``owner`` None means entry i is object i.
     """
-    idx = np.arange(len(lo)) if members is None else np.flatnonzero(members)
-    empty = np.empty((0, 2), dtype=np.int64)
-    if len(idx) < 2:
-        return empty
-    s = span[idx]
-    counts = s[:, 0] * s[:, 1] * s[:, 2]
-    if counts.max() == 1:  # common case: every object inside one cell
-        owner, cells = idx, lo[idx]
+    idx = None if members is None else members.nonzero()[0]
+    if idx is None:
+        keys, s, owner = lo @ _WEIGHTS, span, None
     else:
-        owner = np.repeat(idx, counts)
-        # Enumerate each object's cells: local offset k in [0, count) -> (dx, dy, dz).
-        starts = np.repeat(np.cumsum(counts) - counts, counts)
-        k = np.arange(len(owner)) - starts
-        sx, sy = np.repeat(s[:, 0], counts), np.repeat(s[:, 1], counts)
-        cells = lo[owner] + np.stack([k % sx, (k // sx) % sy, k // (sx * sy)], axis=1)
-    keys = _keys(cells)
-    order = np.argsort(keys)
-    keys, owner = keys[order], owner[order]
-    mine = moved[owner]
-    if not mine.any():
-        return empty
-    probe = keys[mine]
-    left = np.searchsorted(keys, probe, "left")
-    run = np.searchsorted(keys, probe, "right") - left
-    shared = run > 1
-    if not shared.any():
-        return empty
-    probe_owner, left, run = owner[mine][shared], left[shared], run[shared]
-    which = np.repeat(np.arange(len(run)), run)
-    offset = np.arange(len(which)) - np.repeat(np.cumsum(run) - run, run)
-    a = probe_owner[which]
-    b = owner[left[which] + offset]
-    keep = a != b
-    return np.stack([a[keep], b[keep]], axis=1)
+        keys, s, owner = lo[idx] @ _WEIGHTS, span[idx], idx
+    if not np.count_nonzero(s):
+        return keys, owner
+    # Add the further cells axis by axis: along x, every entry so far (offset 0 on x) gets
+    # one more entry per extra cell its object spans on x; then y over all of those; then z.
+    which = None
+    for axis in range(3):
+        if not np.count_nonzero(s[:, axis]):
+            continue  # no object spans two cells along this axis
+        if which is None:
+            which = np.arange(len(keys))
+        col = s[which, axis]
+        top = int(col.max())
+        parts_k, parts_w = [keys], [which]
+        for k in range(1, top + 1):
+            extra = (col >= k).nonzero()[0]
+            parts_k.append(keys[extra] + k * _WEIGHTS[axis])
+            parts_w.append(which[extra])
+        keys, which = np.concatenate(parts_k), np.concatenate(parts_w)
+    assert which is not None
+    return keys, (which if owner is None else owner[which])
+
+
+def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.ndarray) -> np.ndarray:
+    """Pairs of entries with equal keys (as owners), each with a moved owner.
+
+    ``owner`` None means entry i is object i. Pairs come out unordered and, for objects that
+    share several cells, repeated (the caller dedupes).
+    """
+    if len(keys) < 2:
+        return _EMPTY
+    if len(keys) <= _SORT_MAX:
+        entries = np.argsort(keys, kind="stable")
+    else:
+        shared = _in_shared_slots(keys)
+        if len(shared) < 2:
+            return _EMPTY
+        entries = shared[np.argsort(keys[shared], kind="stable")]
+    k_sorted = keys[entries]
+    same = k_sorted[1:] == k_sorted[:-1]
+    if not same.any():
+        return _EMPTY
+    first = same.nonzero()[0]
+    if not (same[1:] & same[:-1]).any():  # no cell holds three or more: neighbours pair up
+        a_e, b_e = entries[first], entries[first + 1]
+    else:
+        # Pair every entry with each later entry of its run of equal keys.
+        m = len(entries)
+        boundary = np.concatenate(([True], ~same, [True])).nonzero()[0]
+        after = np.repeat(boundary[1:], np.diff(boundary)) - np.arange(m) - 1
+        first = np.repeat(np.arange(m), after)
+        offset = np.arange(len(first)) - np.repeat(np.cumsum(after) - after, after) + 1
+        a_e, b_e = entries[first], entries[first + offset]
+    # An object's cells are distinct, so a and b are never the same object.
+    a = a_e if owner is None else owner[a_e]
+    b = b_e if owner is None else owner[b_e]
+    keep = moved[a] | moved[b]
+    return _pairs(a[keep], b[keep])
+
+
+def _in_shared_slots(keys: np.ndarray) -> np.ndarray:
+    """Entry indices (ascending) whose key equals another entry's key.
+
+    Every entry writes its index into the slot its key hashes to, in a table of at least four
+    slots per entry; an entry that reads back another's index lost its slot. A loser with the
+    winner's key shares a cell with it; losers with other keys (different cells hashed to one
+    slot) are resolved the same way among themselves, with a fresh table.
+    """
+    found: list[np.ndarray] = []
+    entry = np.arange(len(keys))
+    while len(entry) > 1:
+        e = len(entry)
+        bits = max(int(4 * e - 1).bit_length(), 4)
+        slot = ((keys.view(np.uint64) * _GOLDEN) >> np.uint64(64 - bits)).astype(np.intp)
+        table = np.empty(1 << bits, dtype=np.int32)
+        local = np.arange(e, dtype=np.int32)
+        table[slot] = local  # one writer of each slot wins; which one does not matter
+        winner = table[slot]
+        lost = (winner != local).nonzero()[0]
+        if not len(lost):
+            break
+        beaten_by = winner[lost]
+        same = keys[lost] == keys[beaten_by]
+        if same.any():
+            found += [entry[lost[same]], entry[beaten_by[same]]]
+        rest = lost[~same]
+        entry, keys = entry[rest], keys[rest]
+    if not found:
+        return _EMPTY[:, 0]
+    return _sorted_set(found)
+
+
+def _sorted_set(parts: list[np.ndarray]) -> np.ndarray:
+    """Ascending distinct values of the arrays in ``parts`` (small arrays)."""
+    values = np.sort(np.concatenate(parts))
+    if len(values) > 1:
+        values = values[np.concatenate(([True], values[1:] != values[:-1]))]
+    return values

@@ -1,16 +1,15 @@
 """Collision detection: AABBs from the state store, broad phase, narrow phase, events.
 
-Each object's body-frame AABB (center offset and half extents) is read from PyBullet once,
-when the collision system first sees the object. After that its world AABB is computed from
-the state store with numpy (``center = p + R c``, ``half = |R| h``), only for rows that moved;
-STATIC objects keep the AABB they were registered with, DISABLED objects have none.
-Articulated bodies (URDF with joints) are the exception: their links move relative to the
-base, so their AABBs are read from PyBullet whenever they move.
+A check: register rows new to the collision system (``geometry.py``), refresh the world AABBs
+of rows that moved, find candidate pairs that involve a moved row (``broadphase.py``), keep
+those whose AABBs overlap, run the narrow phase on the survivors (``narrowphase.py``), and
+update the active pairs (``pairs.py``): ``collision_started`` / ``collision_ended`` fire once
+per contact. A check in which nothing moved and nothing joined does no array work at all.
 
-A check then runs: broad phase over pairs involving a moved object (``broadphase.py``), AABB
-overlap, and the narrow phase on the survivors only, after pushing just their rows to
-PyBullet. Pairs that involve no moved object keep their state, so active pairs are tracked
-incrementally and ``collision_started`` / ``collision_ended`` fire once per contact.
+With ``SimulationParams.collision_sweep`` the broad phase uses each moved row's AABB swept from
+its position at the previous check to its position now, and pairs that are not touching at
+the end are asked whether they touched on the way (``NarrowPhase.touched_during``): two robots
+that pass through each other within one step are reported.
 """
 
 from __future__ import annotations
@@ -24,9 +23,10 @@ import pybullet as p
 
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionDetectionMethod, SpatialHashCellSizeMode
-from fleet_async.core.collision.broadphase import aabb_overlap, auto_cell_size, candidate_pairs
-from fleet_async.core.geometry.quaternions import rotate_vectors_batch
-from fleet_async.core.world.shapes import body_collision_shape
+from fleet_async.core.collision.broadphase import auto_cell_size, candidate_pairs
+from fleet_async.core.collision.geometry import CollisionGeometry
+from fleet_async.core.collision.narrowphase import NarrowPhase
+from fleet_async.core.collision.pairs import ActivePairs, decode, pair_codes
 from fleet_async.core.world.state import COLLISION_CODES
 
 if TYPE_CHECKING:
@@ -37,32 +37,23 @@ __all__ = ["CollisionSystem"]
 _STATIC = COLLISION_CODES["static"]
 _DISABLED = COLLISION_CODES["disabled"]
 _FLAT = COLLISION_CODES["normal_2d"]
-
-
-def _abs_rotation(quats: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) element-wise absolute rotation matrices of (x, y, z, w) quaternions."""
-    x, y, z, w = quats[:, 0], quats[:, 1], quats[:, 2], quats[:, 3]
-    r = np.empty((len(quats), 3, 3))
-    r[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    r[:, 0, 1] = 2 * (x * y - z * w)
-    r[:, 0, 2] = 2 * (x * z + y * w)
-    r[:, 1, 0] = 2 * (x * y + z * w)
-    r[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    r[:, 1, 2] = 2 * (y * z - x * w)
-    r[:, 2, 0] = 2 * (x * z - y * w)
-    r[:, 2, 1] = 2 * (y * z + x * w)
-    r[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return np.abs(r)
+_NO_PAIRS = np.empty((0, 2), dtype=np.int64)
+_NO_ROWS = np.empty(0, dtype=np.int64)
+_SWEPT_CELLS = 7.0  # cells an object may span per axis, swept, and still be hashed
 
 
 class CollisionSystem:
-    """Collision state and checks of one simulation."""
+    """Collision state and checks of one simulation.
+
+    Args:
+        sim: The simulation (its state store, client, objects and event bus).
+        on_sync: Pushes the given rows' poses to PyBullet.
+    """
 
     def __init__(
         self, sim: MultiRobotSimulationCore, on_sync: Callable[[np.ndarray], None]
     ) -> None:
         self._sim = sim
-        self._sync_rows = on_sync
         prm = sim.params
         self.frequency = prm.collision_check_frequency
         self.cell_mode = prm.spatial_hash_cell_size_mode
@@ -72,22 +63,34 @@ class CollisionSystem:
         self.multi_cell_threshold = prm.multi_cell_threshold
         self.ignore_static = prm.ignore_static_collision
         self.color_change = prm.enable_collision_color_change
-        self._cap = 0
-        self._center = np.zeros((0, 3))  # body-frame AABB center offset
-        self._half = np.zeros((0, 3))  # body-frame AABB half extents
-        self._aabb_min = np.zeros((0, 3))
-        self._aabb_max = np.zeros((0, 3))
-        self._owner = np.zeros(0, dtype=np.int64)  # object id the row was registered for
-        self._mode = np.zeros(0, dtype=np.int8)  # collision code at registration
-        self._articulated = np.zeros(0, dtype=bool)
-        self._shape = np.zeros(0, dtype=np.int64)  # single collision shape id, or -1
-        self._box = np.zeros(0, dtype=bool)  # the body is one box shape, unrotated in its frame
-        self._box_center = np.zeros((0, 3))  # that box's center in the body frame
-        self._box_half = np.zeros((0, 3))  # and its half extents
-        self._active: set[tuple[int, int]] = set()
+        self.sweep = prm.collision_sweep
+        pad = self.margin / 2 if self.method is not CollisionDetectionMethod.CONTACT_POINTS else 0.0
+
+        world = sim.world
+
+        def client() -> int:  # checks need no body they do not ask for: none is created here
+            return world.client
+
+        self.geometry = CollisionGeometry(pad, client, on_sync, world)
+        self.narrow = NarrowPhase(
+            self.geometry, self.method, self.margin, client, on_sync, world.create_pending_bodies
+        )
+        self._active = ActivePairs()
         self._colors: dict[int, list[Any]] = {}
         self._next_due_step = 0
-        self.registrations = 0
+        self._layout = -1  # store layout version the cached row sets below belong to
+        self._rows = np.empty(0, dtype=np.int64)  # rows taking part, ascending
+        self._all_rows = False  # rows == arange(high): views instead of gathers
+        self._flat: np.ndarray | None = None  # NORMAL_2D mask over rows, None if none
+        self._static: np.ndarray | None = None  # STATIC mask over rows, None if none
+        self._plain = False  # no STATIC, no articulated rows: whole-array AABB refresh allowed
+        self._start = np.zeros((0, 3))  # row positions at the previous check (sweep)
+        self._relaid = False  # the last _prepare saw rows added, removed or changing mode
+
+    @property
+    def registrations(self) -> int:
+        """Rows registered so far (each reads its body-frame geometry once)."""
+        return self.geometry.registrations
 
     # ----- schedule -----------------------------------------------------------------------
 
@@ -101,179 +104,125 @@ class CollisionSystem:
         self._next_due_step = 0
 
     def is_due(self, step: int, timestep: float) -> bool:
-        """Whether the check runs in ``step`` (0-based)."""
+        """Whether the check runs in ``step`` (0-based); advances the schedule when it does."""
         if self.frequency is None:
             return True
-        if self.frequency == 0:
+        if self.frequency == 0 or step < self._next_due_step:
             return False
-        if step < self._next_due_step:
-            return False
-        period_steps = max(1, round(1.0 / (self.frequency * timestep)))
-        self._next_due_step = step + period_steps
+        self._next_due_step = step + max(1, round(1.0 / (self.frequency * timestep)))
         return True
 
     def get_state(self) -> dict[str, Any]:
         """Active pairs, the check schedule and the hash cell size (checkpoints)."""
         return {
-            "active": sorted(self._active),
+            "active": self._active.get_state(),
             "next_due_step": self._next_due_step,
             "cell_size": self.cell_size,
         }
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore :meth:`get_state`; registrations are redone at the next check."""
-        self._active = {(int(a), int(b)) for a, b in state["active"]}
+        self._active.set_state(state["active"])
         self._next_due_step = state["next_due_step"]
         self.cell_size = state["cell_size"]
 
+    def idle_steps(self, step: int, limit: int) -> int:
+        """How many of the steps ``step, step + 1, ...`` (at most ``limit``) need no check:
+        all of them when nothing moved and no row joined or left since the last check (a
+        check would find nothing new), else those before the next check falls due."""
+        if self.frequency == 0:
+            return limit
+        store = self._sim.state
+        if store.layout_version == self._layout and not np.count_nonzero(
+            store.moved[: store.high_water]
+        ):
+            return limit
+        if self.frequency is None:
+            return 0
+        return max(0, min(limit, self._next_due_step - step))
+
+    def skip(self, step: int, n: int, timestep: float) -> None:
+        """Advance the schedule over ``n`` empty steps from ``step`` as if they had run: a
+        check falling due among them would have found nothing new, so only its time counts."""
+        if self.frequency is None or not self.frequency:
+            return
+        first = max(step, self._next_due_step)
+        end = step + n - 1
+        if first > end:
+            return
+        period = max(1, round(1.0 / (self.frequency * timestep)))
+        self._next_due_step = first + ((end - first) // period) * period + period
+
     def reset(self) -> None:
         """Forget every registration and active pair (simulation reset)."""
-        self._owner[:] = -1
+        self.geometry.reset()
         self._active.clear()
         self._colors.clear()
         self._next_due_step = 0
+        self._layout = -1
         if self.cell_mode is not SpatialHashCellSizeMode.CONSTANT:
             self.cell_size = None
 
-    # ----- AABBs --------------------------------------------------------------------------
-
-    def _reserve(self, n: int) -> None:
-        if n <= self._cap:
-            return
-        cap = max(n, 2 * self._cap, 64)
-        for name, width, dtype, fill in (
-            ("_center", 3, float, 0.0),
-            ("_half", 3, float, 0.0),
-            ("_aabb_min", 3, float, 0.0),
-            ("_aabb_max", 3, float, 0.0),
-            ("_owner", 0, np.int64, -1),
-            ("_mode", 0, np.int8, 0),
-            ("_articulated", 0, bool, False),
-            ("_shape", 0, np.int64, -1),
-            ("_box", 0, bool, False),
-            ("_box_center", 3, float, 0.0),
-            ("_box_half", 3, float, 0.0),
-        ):
-            old = getattr(self, name)
-            new = np.full((cap, width) if width else cap, fill, dtype=dtype)
-            new[: len(old)] = old
-            setattr(self, name, new)
-        self._cap = cap
-
-    def _register(self, rows: np.ndarray) -> None:
-        """Read body-frame AABBs from PyBullet for rows new to the collision system."""
-        store, client = self._sim.state, self._sim.client
-        self._sync_rows(rows)
-        for row in rows.tolist():
-            body = int(store.body_id[row])
-            pos = store.position[row]
-            orn = store.orientation[row]
-            n_links = p.getNumJoints(body, physicsClientId=client) if body >= 0 else 0
-            self._articulated[row] = n_links > 0
-            self._shape[row] = body_collision_shape(client, body) if n_links == 0 else -1
-            self._box[row] = False
-            if body >= 0 and n_links == 0:
-                self._read_box(row, body, client)
-            lo, hi = self._body_aabb(body, n_links, client) if body >= 0 else (pos, pos)
-            identity = np.array_equal(orn, [0.0, 0.0, 0.0, 1.0])
-            if not identity and body >= 0 and n_links == 0:
-                # Read the AABB at identity orientation to get it in the body frame.
-                p.resetBasePositionAndOrientation(
-                    body, pos.tolist(), [0, 0, 0, 1], physicsClientId=client
-                )
-                lo, hi = self._body_aabb(body, 0, client)
-                p.resetBasePositionAndOrientation(
-                    body, pos.tolist(), orn.tolist(), physicsClientId=client
-                )
-            lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-            self._center[row] = (lo + hi) / 2 - pos
-            self._half[row] = (hi - lo) / 2
-            self._owner[row] = store.object_id[row]
-            self._mode[row] = store.collision_mode[row]
-            self.registrations += 1
-        self._refresh(rows, force=True)
-
-    def _read_box(self, row: int, body: int, client: int) -> None:
-        """Record the body's box if it is exactly one box shape with no rotation in its frame."""
-        data = p.getCollisionShapeData(body, -1, physicsClientId=client)
-        if len(data) != 1 or data[0][2] != p.GEOM_BOX:
-            return
-        if not np.array_equal(data[0][6], [0.0, 0.0, 0.0, 1.0]):
-            return
-        self._box[row] = True
-        self._box_center[row] = data[0][5]
-        self._box_half[row] = np.asarray(data[0][3], dtype=float) / 2
-
-    @staticmethod
-    def _body_aabb(body: int, n_links: int, client: int) -> tuple[np.ndarray, np.ndarray]:
-        boxes = [p.getAABB(body, link, physicsClientId=client) for link in range(-1, n_links)]
-        lo = np.min([b[0] for b in boxes], axis=0)
-        hi = np.max([b[1] for b in boxes], axis=0)
-        return lo, hi
-
-    def _refresh(self, rows: np.ndarray, force: bool = False) -> None:
-        """Recompute world AABBs of moved rows (STATIC rows only when ``force``)."""
-        if not force:
-            rows = rows[self._mode[rows] != _STATIC]
-        if not len(rows):
-            return
-        art = self._articulated[rows]
-        if art.any():
-            store, client = self._sim.state, self._sim.client
-            self._sync_rows(rows[art])
-            for row in rows[art].tolist():
-                body = int(store.body_id[row])
-                lo, hi = self._body_aabb(body, p.getNumJoints(body, physicsClientId=client), client)
-                self._aabb_min[row], self._aabb_max[row] = lo, hi
-            rows = rows[~art]
-        if not len(rows):
-            return
-        store = self._sim.state
-        quats = store.orientation[rows]
-        upright = (quats[:, 3] == 1.0) & ~quats[:, :3].any(axis=1)  # identity: no rotation work
-        if upright.any():
-            r = rows[upright]
-            center = store.position[r] + self._center[r]
-            self._aabb_min[r] = center - self._half[r]
-            self._aabb_max[r] = center + self._half[r]
-        if not upright.all():
-            r, q = rows[~upright], quats[~upright]
-            center = store.position[r] + rotate_vectors_batch(self._center[r], q)
-            half = np.einsum("nij,nj->ni", _abs_rotation(q), self._half[r])
-            self._aabb_min[r] = center - half
-            self._aabb_max[r] = center + half
+    # ----- rows taking part -----------------------------------------------------------------
 
     def prepare_rows(self) -> np.ndarray:
         """Register and refresh as a check would; return the rows taking part."""
-        return self._prepare()
+        self._prepare()
+        return self._rows
 
     def _prepare(self) -> np.ndarray:
-        """Register new / changed rows, refresh moved ones; return the rows taking part."""
+        """Register new / changed rows and refresh moved ones; return the moved rows."""
         store = self._sim.state
         high = store.high_water
-        self._reserve(store.capacity)
+        self._relaid = store.layout_version != self._layout
+        if self._relaid:
+            self._relayout()
+        flags = store.moved[:high]
+        moved = flags.nonzero()[0] if np.count_nonzero(flags) else _NO_ROWS
+        # Most rows moved and none is special: one pass over every row beats gathers.
+        whole = self._plain and 4 * len(moved) >= high
+        if len(moved) and not (whole and self.geometry.refresh_all(high, store)):
+            self.geometry.refresh(moved, store)
+        return moved
+
+    def _relayout(self) -> None:
+        """Rows were added, removed or changed mode: register the new ones, cache row sets."""
+        store, geo = self._sim.state, self.geometry
+        high = store.high_water
+        geo.reserve(store.capacity)
+        if len(self._start) < store.capacity:
+            grown = np.zeros((store.capacity, 3))
+            grown[: len(self._start)] = self._start
+            self._start = grown
         live = store.active[:high]
-        stale = live & (
-            (self._owner[:high] != store.object_id[:high])
-            | (self._mode[:high] != store.collision_mode[:high])
+        mode = store.collision_mode[:high]
+        stale = (
+            live
+            & (mode != _DISABLED)
+            & ((geo.owner[:high] != store.object_id[:high]) | (geo.mode[:high] != mode))
         )
-        stale &= store.collision_mode[:high] != _DISABLED
-        new_rows = np.flatnonzero(stale)
+        new_rows = stale.nonzero()[0]
         if len(new_rows):
-            self._register(new_rows)
-        self._mode[:high] = np.where(live, store.collision_mode[:high], self._mode[:high])
-        moved = np.flatnonzero(live & store.moved[:high])
-        self._refresh(moved)
-        return np.flatnonzero(live & (store.collision_mode[:high] != _DISABLED))
+            geo.register(new_rows, store)
+            self._start[new_rows] = store.position[new_rows]
+        geo.mode[:high] = np.where(live, mode, geo.mode[:high])
+        part = live & (mode != _DISABLED)
+        self._rows = part.nonzero()[0]
+        self._all_rows = len(self._rows) == high
+        modes = mode[self._rows]
+        flat, static = modes == _FLAT, modes == _STATIC
+        self._flat = flat if flat.any() else None
+        self._static = static if static.any() else None
+        self._plain = self._static is None and not geo.articulated[self._rows].any()
+        self._layout = store.layout_version
 
     def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
         """``{object_id: (aabb_min, aabb_max)}`` for every object that takes part."""
-        rows = self._prepare()
-        ids = self._sim.state.object_id[rows]
-        return {
-            int(i): (self._aabb_min[r].tolist(), self._aabb_max[r].tolist())
-            for i, r in zip(ids, rows, strict=True)
-        }
+        self._prepare()
+        rows = self._rows
+        ids = self._sim.state.object_id[rows].tolist()
+        lo, hi = self.geometry.unpadded(rows)
+        return dict(zip(ids, zip(lo.tolist(), hi.tolist(), strict=True), strict=True))
 
     # ----- broad phase --------------------------------------------------------------------
 
@@ -283,127 +232,80 @@ class CollisionSystem:
             return self.cell_size
         adaptive = self.cell_mode is SpatialHashCellSizeMode.AUTO_ADAPTIVE
         if self.cell_size is None or recompute or adaptive:
-            self.cell_size = auto_cell_size(self._aabb_min[rows], self._aabb_max[rows])
+            lo, hi = self.geometry.unpadded(rows)
+            self.cell_size = auto_cell_size(lo, hi)
         return self.cell_size
 
     def filter_pairs(
         self, ignore_static: bool | None = None, moved_ids: set[int] | None = None
     ) -> tuple[np.ndarray, dict[str, float]]:
-        """Rows pairs (i < j) whose AABBs overlap (inflated by the margin), with timings in ms."""
+        """Row pairs (i < j) whose AABBs overlap (inflated by the margin), with timings in ms."""
         t0 = time.perf_counter()
-        rows = self._prepare()
+        moved_rows = self._prepare()
         t1 = time.perf_counter()
         store = self._sim.state
-        if moved_ids is None:
-            moved = store.moved[rows]
+        if moved_ids is not None:
+            ids = np.fromiter(moved_ids, dtype=np.int64, count=len(moved_ids))
+            pairs = self._broad_phase(np.isin(store.object_id[self._rows], ids), ignore_static)
+        elif len(moved_rows):
+            pairs = self._broad_phase(None, ignore_static)
         else:
-            moved = np.isin(
-                store.object_id[rows], np.fromiter(moved_ids, dtype=np.int64, count=len(moved_ids))
-            )
-        pad = self.margin / 2 if self.method is not CollisionDetectionMethod.CONTACT_POINTS else 0.0
-        amin, amax = self._aabb_min[rows] - pad, self._aabb_max[rows] + pad
-        mode = store.collision_mode[rows]
-        flat = mode == _FLAT
-        cell = self.resolve_cell_size(rows)
-        idx = candidate_pairs(amin, amax, flat, moved, cell, self.multi_cell_threshold)
+            pairs = _NO_PAIRS
         t2 = time.perf_counter()
-        if len(idx):
-            skip_static = self.ignore_static if ignore_static is None else ignore_static
-            if skip_static:  # else static-static pairs are checked too, once (they never move)
-                keep = (mode[idx[:, 0]] != _STATIC) & (mode[idx[:, 1]] != _STATIC)
-                idx = idx[keep]
-            flat_pair = flat[idx[:, 0]] | flat[idx[:, 1]]
-            idx = idx[
-                aabb_overlap(
-                    amin[idx[:, 0]], amax[idx[:, 0]], amin[idx[:, 1]], amax[idx[:, 1]], flat_pair
-                )
-            ]
+        if len(pairs):
+            pairs = pairs[self.narrow.aabbs_overlap(pairs)]
         t3 = time.perf_counter()
-        timings = {
+        return pairs, {
             "get_aabbs": (t1 - t0) * 1e3,
             "spatial_hashing": (t2 - t1) * 1e3,
             "aabb_filtering": (t3 - t2) * 1e3,
         }
-        return rows[idx] if len(idx) else np.empty((0, 2), dtype=np.int64), timings
 
-    # ----- narrow phase and events -----------------------------------------------------------
-
-    def _touching(self, row_pairs: np.ndarray) -> list[bool]:
-        """Narrow phase for candidate row pairs.
-
-        Two single-box bodies at identity orientation (the common case for box robots, totes
-        and pallets) get their exact distance in one numpy pass. Other distance queries on two
-        bodies that are each one known collision shape go to PyBullet as (shape, pose from the
-        store), so those rows are never pushed just for the query; the rest push their rows.
-        """
-        store, client = self._sim.state, self._sim.client
-        if not len(row_pairs):
-            return []
-        kinematic = store.kinematic[row_pairs]
-        if self.method is CollisionDetectionMethod.CONTACT_POINTS:
-            contact = np.ones(len(row_pairs), dtype=bool)
-        elif self.method is CollisionDetectionMethod.HYBRID:
-            contact = ~kinematic.any(axis=1)
+    def _broad_phase(
+        self, moved: np.ndarray | None, ignore_static: bool | None, sweep: bool = False
+    ) -> np.ndarray:
+        """Candidate row pairs (sharing a hash cell, one side moved, static rules applied);
+        ``moved`` None: the store's flags. Their AABBs may not overlap."""
+        store, geo = self._sim.state, self.geometry
+        rows = self._rows
+        high = store.high_water
+        if self._all_rows:
+            amin, amax = geo.aabb_min[:high], geo.aabb_max[:high]
+            if moved is None:
+                moved = store.moved[:high]
         else:
-            contact = np.zeros(len(row_pairs), dtype=bool)
-        exact = ~contact & self._unrotated_boxes(row_pairs)
-        out = np.zeros(len(row_pairs), dtype=bool)
-        if exact.any():
-            out[exact] = self._box_distance(row_pairs[exact]) <= self.margin
-            if exact.all():
-                return out.tolist()
-        shapes = self._shape[row_pairs]
-        by_shape = ~contact & ~exact & (shapes >= 0).all(axis=1)
-        needs_body = row_pairs[~by_shape & ~exact]
-        if len(needs_body):
-            self._sync_rows(np.unique(needs_body))
-        bodies = store.body_id[row_pairs].tolist()
-        pos = store.position[row_pairs].tolist()
-        orn = store.orientation[row_pairs].tolist()
-        margin = self.margin
-        for k in np.flatnonzero(~exact).tolist():
-            a, b = bodies[k]
-            if contact[k]:
-                out[k] = len(p.getContactPoints(a, b, physicsClientId=client)) > 0
-            elif by_shape[k]:
-                hits = p.getClosestPoints(
-                    -1,
-                    -1,
-                    margin,
-                    collisionShapeA=int(shapes[k, 0]),
-                    collisionShapeB=int(shapes[k, 1]),
-                    collisionShapePositionA=pos[k][0],
-                    collisionShapePositionB=pos[k][1],
-                    collisionShapeOrientationA=orn[k][0],
-                    collisionShapeOrientationB=orn[k][1],
-                    physicsClientId=client,
-                )
-                out[k] = len(hits) > 0
-            else:
-                out[k] = len(p.getClosestPoints(a, b, margin, physicsClientId=client)) > 0
-        return out.tolist()
+            amin, amax = geo.aabb_min[rows], geo.aabb_max[rows]
+            if moved is None:
+                moved = store.moved[rows]
+        threshold = self.multi_cell_threshold
+        if sweep:
+            shift = self._start[rows] - store.position[rows]
+            amin = amin + np.minimum(shift, 0.0)
+            amax = amax + np.maximum(shift, 0.0)
+            # A swept box spans a few more cells than the box: hash it over them rather
+            # than test it against every object; only a jump of many cells (a teleport) is
+            # tested that way.
+            threshold = max(threshold, _SWEPT_CELLS)
+        cell = self.resolve_cell_size(rows)
+        idx = candidate_pairs(amin, amax, self._flat, moved, cell, threshold)
+        if len(idx) and self._static is not None:
+            skip_static = self.ignore_static if ignore_static is None else ignore_static
+            if skip_static:  # else static-static pairs are checked too, once (they never move)
+                idx = idx[~(self._static[idx[:, 0]] | self._static[idx[:, 1]])]
+        if not len(idx):
+            return _NO_PAIRS
+        return idx if self._all_rows else rows[idx]
 
-    def _unrotated_boxes(self, row_pairs: np.ndarray) -> np.ndarray:
-        """Pairs whose two bodies are single boxes at identity orientation (exact distance)."""
-        both = self._box[row_pairs].all(axis=1)
-        if not both.any():
-            return both
-        orn = self._sim.state.orientation[row_pairs]  # (K, 2, 4)
-        identity = (orn[:, :, 3] == 1.0).all(axis=1) & ~orn[:, :, :3].any(axis=(1, 2))
-        return both & identity
+    # ----- checks -------------------------------------------------------------------------
 
-    def _box_distance(self, row_pairs: np.ndarray) -> np.ndarray:
-        """Exact distance (m) between two axis-aligned boxes per pair (0 when they overlap).
-
-        Matches PyBullet's closest-points distance for unrotated box shapes, without a call
-        per pair.
-        """
-        store = self._sim.state
-        a, b = row_pairs[:, 0], row_pairs[:, 1]
-        ca = store.position[a] + self._box_center[a]
-        cb = store.position[b] + self._box_center[b]
-        gap = np.abs(ca - cb) - self._box_half[a] - self._box_half[b]
-        return np.sqrt((np.maximum(gap, 0.0) ** 2).sum(axis=1))
+    def run(self) -> None:
+        """The step's check: like :meth:`check`, without building its return value."""
+        moved_rows = self._prepare()
+        if len(moved_rows):
+            self._finish(self._broad_phase(None, None, self.sweep), moved_rows, None, False)
+        elif self._relaid and len(self._active):
+            self._finish(_NO_PAIRS, moved_rows, None, True)  # contacts of removed objects end
+        # else nothing moved and nobody left: no pair can have started or ended
 
     def check(
         self, ignore_static: bool | None = None, collision_color: list[float] | None = None
@@ -412,60 +314,92 @@ class CollisionSystem:
         (``get_aabbs``, ``spatial_hashing``, ``aabb_filtering``, ``contact_points``, ``events``:
         the collision events' handlers, ``total``)."""
         t0 = time.perf_counter()
-        store = self._sim.state
-        high = store.high_water
-        row_pairs, timings = self.filter_pairs(ignore_static)
+        if self.sweep:
+            moved_rows = self._prepare()
+            row_pairs = (
+                self._broad_phase(None, ignore_static, True) if len(moved_rows) else _NO_PAIRS
+            )
+            timings = {"get_aabbs": 0.0, "spatial_hashing": 0.0, "aabb_filtering": 0.0}
+            checked = False
+        else:
+            row_pairs, timings = self.filter_pairs(ignore_static)
+            moved_rows = self._sim.state.moved[: self._sim.state.high_water].nonzero()[0]
+            checked = True
         t1 = time.perf_counter()
-        touching = self._touching(row_pairs)
-        t2 = time.perf_counter()
-        ids = store.object_id[row_pairs].tolist() if len(row_pairs) else []
-        now = {tuple(sorted(pair)) for pair, hit in zip(ids, touching, strict=True) if hit}
-        # An active pair ends when it was re-checked (one side moved) and is no longer touching,
-        # or when one side left the simulation. Pairs where neither moved keep their state.
-        ended = {pair for pair in self._active if pair not in now and self._recheck(pair)}
-        started = now - self._active
-        self._active = (self._active - ended) | started
-        store.moved[:high] = False
-        t3 = time.perf_counter()
-        self._emit(sorted(ended), sorted(started), collision_color)
-        timings["contact_points"] = (t2 - t1) * 1e3
-        timings["events"] = (time.perf_counter() - t3) * 1e3
+        events_ms = self._finish(row_pairs, moved_rows, collision_color, checked)
+        timings["contact_points"] = (time.perf_counter() - t1) * 1e3 - events_ms
+        timings["events"] = events_ms
         timings["total"] = (time.perf_counter() - t0) * 1e3
-        return sorted(self._active), timings
+        return self._active.as_list(), timings
 
-    def _recheck(self, pair: tuple[int, int]) -> bool:
-        store = self._sim.state
-        for object_id in pair:
-            obj = self._sim.get_object_by_id(object_id)
-            if obj is None or store.moved[obj.state_row]:
-                return True
-        return False
-
-    def _emit(
+    def _finish(
         self,
-        ended: list[tuple[int, int]],
-        started: list[tuple[int, int]],
+        row_pairs: np.ndarray,
+        moved_rows: np.ndarray,
         color: list[float] | None,
-    ) -> None:
+        aabb_checked: bool,
+    ) -> float:
+        """Narrow phase on the candidates, active pair update, events; clear ``moved``.
+        Return the ms the events took."""
+        store = self._sim.state
+        touching = self.narrow.touching(row_pairs, store, aabb_checked=aabb_checked)
+        if self.sweep and not touching.all():
+            self._sweep_test(row_pairs, touching)
+        ended, started = self._active.update(row_pairs[touching], store)
+        if self.sweep:
+            self._start[moved_rows] = store.position[moved_rows]
+        store.moved[moved_rows] = False
+        if not (len(ended) or len(started)):
+            return 0.0
+        t0 = time.perf_counter()
+        self._emit(ended, started, color)
+        return (time.perf_counter() - t0) * 1e3
+
+    def _sweep_test(self, row_pairs: np.ndarray, touching: np.ndarray) -> None:
+        """Mark pairs that touched on the way (were not in contact before, are not now)."""
+        store, geo = self._sim.state, self.geometry
+        apart = (~touching).nonzero()[0]
+        apart = apart[~self._active.contains(pair_codes(store.object_id[row_pairs[apart]]))]
+        if not len(apart):
+            return
+        rp = row_pairs[apart]
+        shift = self._start[rp] - store.position[rp]  # (K, 2, 3)
+        lo = geo.aabb_min[rp] + np.minimum(shift, 0.0)
+        hi = geo.aabb_max[rp] + np.maximum(shift, 0.0)
+        sep = (lo[:, 0] > hi[:, 1]) | (lo[:, 1] > hi[:, 0])
+        flat = geo.mode[rp] == _FLAT
+        sep[:, 2] &= ~(flat[:, 0] | flat[:, 1])
+        apart = apart[~sep.any(axis=1)]  # swept AABBs overlap
+        if len(apart):
+            touching[apart] = self.narrow.touched_during(row_pairs[apart], store, self._start)
+
+    def _emit(self, ended: np.ndarray, started: np.ndarray, color: list[float] | None) -> None:
         sim = self._sim
-        for event, pairs in (
-            (SimEvents.COLLISION_ENDED, ended),
-            (SimEvents.COLLISION_STARTED, started),
-        ):
-            for a_id, b_id in pairs:
-                obj_a, obj_b = sim.get_object_by_id(a_id), sim.get_object_by_id(b_id)
-                sim.events.emit(event, sim=sim, obj_a=obj_a, obj_b=obj_b)
-                for me, other in ((obj_a, obj_b), (obj_b, obj_a)):
-                    if me is not None and me.has_event_bus():
-                        me.events.emit(event, sim=sim, obj_a=obj_a, obj_b=obj_b, other=other)
-        if started:
+        if len(started):
             sim.note_collisions(len(started))
-        if self.color_change and (started or ended):
+        events = sim.events
+        listened = (
+            events.has_handlers(SimEvents.COLLISION_ENDED)
+            or events.has_handlers(SimEvents.COLLISION_STARTED)
+            or sim.world.has_entity_buses
+        )
+        if listened:
+            for event, codes in (
+                (SimEvents.COLLISION_ENDED, ended),
+                (SimEvents.COLLISION_STARTED, started),
+            ):
+                for a_id, b_id in decode(codes):
+                    obj_a, obj_b = sim.get_object_by_id(a_id), sim.get_object_by_id(b_id)
+                    events.emit(event, sim=sim, obj_a=obj_a, obj_b=obj_b)
+                    for me, other in ((obj_a, obj_b), (obj_b, obj_a)):
+                        if me is not None and me.has_event_bus():
+                            me.events.emit(event, sim=sim, obj_a=obj_a, obj_b=obj_b, other=other)
+        if self.color_change:
             self._recolor(color if color is not None else sim.collision_color)
 
     def _recolor(self, color: list[float]) -> None:
         sim = self._sim
-        colliding = {i for pair in self._active for i in pair}
+        colliding = {i for pair in self._active.as_list() for i in pair}
         for object_id in colliding - set(self._colors):
             obj = sim.get_object_by_id(object_id)
             if obj is None or obj.body_id < 0:
@@ -485,4 +419,4 @@ class CollisionSystem:
 
     def active_pairs(self) -> list[tuple[int, int]]:
         """Active pairs (object ids, i < j), sorted."""
-        return sorted(self._active)
+        return self._active.as_list()

@@ -41,8 +41,9 @@ __all__ = [
     "OmniController",
     "PatrolController",
     "RandomWalkController",
-    "build_controller_chain",
+    "controller_class",
     "create_controller",
+    "params_dict",
     "register_controller",
 ]
 
@@ -143,7 +144,7 @@ class KinematicController(Controller):
                     f"{type(self).__name__}: unknown parameter(s) {unknown}; "
                     f"valid: {list(ControllerParams.field_names())}"
                 )
-            base = ControllerParams(**{**_params_dict(base), **overrides})
+            base = ControllerParams(**{**params_dict(base), **overrides})
         super().__init__(base)
 
     @property
@@ -229,7 +230,8 @@ class DifferentialController(KinematicController):
         self.wheel_separation = float(wheel_separation)
 
 
-def _params_dict(params: ControllerParams) -> dict[str, Any]:
+def params_dict(params: ControllerParams) -> dict[str, Any]:
+    """The params' fields as a mapping (for building params with some fields replaced)."""
     return {name: getattr(params, name) for name in ControllerParams.field_names()}
 
 
@@ -379,7 +381,12 @@ def register_controller(name: str, cls: type[Controller]) -> None:
     CONTROLLER_REGISTRY[name] = cls
 
 
-def _controller_class(spec: dict[str, Any], where: str) -> type[Controller]:
+def controller_class(spec: dict[str, Any], where: str) -> type[Controller]:
+    """The controller class a ``{type|class: ...}`` mapping names.
+
+    Raises:
+        ValueError: naming ``where`` for both or neither key, or an unknown / non-Controller one.
+    """
     if "type" in spec and "class" in spec:
         raise ValueError(f"{where}: give either 'type' or 'class', not both")
     if "type" not in spec and "class" not in spec:
@@ -410,7 +417,7 @@ def create_controller(
     """
     entry: dict[str, Any] = {"type": spec} if isinstance(spec, str) else dict(spec)
     entry.update(config or {})
-    cls = _controller_class(entry, where)
+    cls = controller_class(entry, where)
     kwargs = {k: v for k, v in entry.items() if k not in ("type", "class")}
     param_keys = set(ControllerParams.field_names())
     params_kw = {k: kwargs.pop(k) for k in list(kwargs) if k in param_keys}
@@ -419,67 +426,3 @@ def create_controller(
         return cls(params=params, **kwargs)
     except TypeError as exc:
         raise ValueError(f"{where}: bad parameters for {cls.__name__}: {exc}") from None
-
-
-def build_controller_chain(
-    spec: Any, motion_mode: MotionMode, defaults: dict[str, Any] | None = None
-) -> list[Controller]:
-    """Turn an Agent's ``controller`` argument into a chain (base first).
-
-    Args:
-        spec: None, a registry name, a mapping, a list of mappings, a ControllerParams or a
-            Controller (see ``Agent``).
-        motion_mode: Picks the base class when ``spec`` names none.
-        defaults: Fleet-wide ControllerParams fields applied under the agent's own.
-    """
-    base_cls: type[KinematicController] = (
-        DifferentialController if motion_mode is MotionMode.DIFFERENTIAL else OmniController
-    )
-    defaults = dict(defaults or {})
-    if spec is None:
-        return [base_cls(ControllerParams(**defaults))]
-    if isinstance(spec, ControllerParams):
-        return [base_cls(ControllerParams(**{**defaults, **_params_dict(spec)}))]
-    if isinstance(spec, Controller):
-        return [spec] if spec.is_base else [base_cls(ControllerParams(**defaults)), spec]
-    entries = spec if isinstance(spec, list) else [spec]
-    chain: list[Controller] = []
-    base: Controller | None = None
-    for i, entry in enumerate(entries):
-        where = f"controller[{i}]" if isinstance(spec, list) else "controller"
-        if isinstance(entry, dict) and "type" not in entry and "class" not in entry:
-            entry = {"type": base_cls.motion_mode.value, **entry}  # params only: default base
-        if isinstance(entry, dict):
-            entry = {**defaults, **entry} if _is_base_entry(entry, where) else entry
-        ctrl = create_controller(entry, where=where) if isinstance(entry, (str, dict)) else entry
-        if not isinstance(ctrl, Controller):
-            raise ValueError(f"{where}: expected a name, mapping or Controller, got {entry!r}")
-        if ctrl.is_base:
-            if base is not None:
-                raise ValueError(
-                    f"{where}: a second base controller ({type(ctrl).__name__}); a chain has one "
-                    f"base (already {type(base).__name__}) plus high-level controllers"
-                )
-            # motion_mode defaults to DIFFERENTIAL, so only an explicit OMNIDIRECTIONAL that a
-            # differential controller contradicts is worth a warning.
-            if (
-                isinstance(ctrl, KinematicController)
-                and motion_mode is MotionMode.OMNIDIRECTIONAL
-                and ctrl.motion_mode is not motion_mode
-            ):
-                logger.warning(
-                    "%s: controller type %s overrides motion_mode=%s",
-                    where,
-                    type(ctrl).__name__,
-                    motion_mode.value,
-                )
-            base = ctrl
-        else:
-            chain.append(ctrl)
-    if base is None:
-        base = base_cls(ControllerParams(**defaults))
-    return [base, *chain]
-
-
-def _is_base_entry(entry: dict[str, Any], where: str) -> bool:
-    return issubclass(_controller_class(entry, where), KinematicController)

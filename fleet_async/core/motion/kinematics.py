@@ -214,6 +214,10 @@ class KinematicEngine:
 
     # ----- queries ------------------------------------------------------------------------
 
+    def is_idle(self) -> bool:
+        """Whether ``advance`` would change nothing (no motion, no arrival left to settle)."""
+        return not self._stopped and not np.count_nonzero(self.mode[: self._high])
+
     def is_moving(self, slot: int) -> bool:
         """Whether the slot follows a path or a non-zero velocity command."""
         mode = self.mode[slot]

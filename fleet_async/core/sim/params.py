@@ -82,6 +82,11 @@ class SimulationParams:
             by default: PyBullet is then synced lazily, when something needs its view (a
             narrow-phase query, a frame, the GUI, physics, ``sim.sync_pybullet()``), and a
             headless kinematic fleet never pays a reset per robot per step.
+        collision_sweep: Also report pairs that touched between two checks while neither pair
+            of poses touches (each object taken to move on the straight line between its
+            positions at the two checks; its orientation is the one at the check). Catches a
+            fast robot passing through another within one step; off by default (it costs a
+            swept broad phase; see docs/performance.md).
     """
 
     target_rtf: float = 1.0
@@ -120,6 +125,7 @@ class SimulationParams:
     monitor_y: int = -1
     seed: int = 0
     sync_pybullet_every_step: bool = False
+    collision_sweep: bool = False
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(

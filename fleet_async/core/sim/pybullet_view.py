@@ -32,7 +32,12 @@ class PyBulletViewApi:
 
     @property
     def client(self) -> int:
-        """PyBullet physics client id, for raw ``pybullet`` calls (``physicsClientId=``)."""
+        """PyBullet physics client id, for raw ``pybullet`` calls (``physicsClientId=``).
+
+        Bodies of objects spawned with a pending body (``world/pending.py``) are created
+        first, so raw calls see every object."""
+        if self._world.has_pending_bodies:
+            self._world.create_pending_bodies()
         return self._backend.client
 
     @property
@@ -45,8 +50,9 @@ class PyBulletViewApi:
 
         Call it before raw ``pybullet`` queries made inside a step (a callback, an event
         handler, a controller): poses written there reach PyBullet lazily. Between steps
-        PyBullet is already current.
+        PyBullet is already current. Pending bodies are created first.
         """
+        self._world.create_pending_bodies()
         return self._backend.sync(self._world.store)
 
     def ray_test(self, ray_from: Sequence[float], ray_to: Sequence[float]) -> list[tuple[Any, ...]]:

@@ -1,8 +1,11 @@
 """run_simulation's loop: real-time pacing, the monitor and GUI input wrapped around step_once.
 
 ``step_once`` knows nothing of wall-clock time. This module decides how many steps to run before
-looking at the clock again, sleeps when the simulation is ahead of ``target_rtf``, feeds the
-monitor, and polls the GUI keyboard.
+looking at the clock again, skips the provably empty steps of each batch in spans
+(``sim.idle_steps`` / ``sim.skip_steps``: the clock lands exactly where stepping would have
+put it, and batches end where they did), sleeps when the simulation is ahead of
+``target_rtf`` (so a skipped span is slept through at the paced rate), feeds the monitor,
+and polls the GUI keyboard.
 """
 
 from __future__ import annotations
@@ -108,12 +111,25 @@ def run_steps(
         )
         if end is not None:
             n = min(n, end - sim.step_count)
-        for _ in range(n):
-            sim.step_once()
+        _advance(sim, n)
         sim.update_monitor()
         if idle is not None:
             idle()
     return sim.step_count - start
+
+
+def _advance(sim: MultiRobotSimulationCore, n: int) -> None:
+    """Run the frame's ``n`` steps, skipping the empty ones in spans (the frame ends at the
+    same step either way, so pacing, the monitor and progress reports see the same frames)."""
+    done = 0
+    while done < n:
+        span = sim.idle_steps(n - done)
+        if span:
+            sim.skip_steps(span)
+            done += span
+        else:
+            sim.step_once()
+            done += 1
 
 
 def run_loop(

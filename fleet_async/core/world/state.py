@@ -56,6 +56,9 @@ class KinematicState:
         self.moved = np.zeros(capacity, dtype=bool)
         self._free: list[int] = []
         self._high_water = 0
+        self.layout_version = 0
+        """Bumped whenever a row is claimed or freed or changes collision mode (lets the
+        collision system skip re-scanning the rows when nothing of the kind happened)."""
 
     @property
     def capacity(self) -> int:
@@ -85,21 +88,30 @@ class KinematicState:
         """Claim a row for one object and fill it; return the row index."""
         if self._free:
             row = heapq.heappop(self._free)
+            # A reused row keeps what its last object left: reset everything.
+            self.velocity[row] = 0.0
+            self.angular_velocity[row] = 0.0
+            self.collision_mode[row] = collision_code
+            self.kinematic[row] = kinematic
+            self.dirty[row] = False
         else:
             row = self._high_water
-            self._reserve(row + 1)
+            if row >= len(self.active):
+                self._reserve(row + 1)
             self._high_water += 1
+            # A fresh row holds the defaults _reserve filled in (zero velocities, mode 0,
+            # kinematic, clean): one spawn of thousands costs only the writes below.
+            if collision_code:
+                self.collision_mode[row] = collision_code
+            if not kinematic:
+                self.kinematic[row] = False
         self.position[row] = position
         self.orientation[row] = orientation
-        self.velocity[row] = 0.0
-        self.angular_velocity[row] = 0.0
         self.body_id[row] = body_id
         self.object_id[row] = object_id
-        self.collision_mode[row] = collision_code
-        self.kinematic[row] = kinematic
         self.active[row] = True
-        self.dirty[row] = False
         self.moved[row] = True
+        self.layout_version += 1
         return row
 
     def allocate_many(
@@ -132,6 +144,7 @@ class KinematicState:
         self.active[rows] = True
         self.dirty[rows] = False  # freshly created bodies already sit at this pose in PyBullet
         self.moved[rows] = True  # but the collision system has not seen them yet
+        self.layout_version += 1
         return rows
 
     def release(self, row: int) -> None:
@@ -144,9 +157,16 @@ class KinematicState:
         self.body_id[row] = -1
         self.object_id[row] = -1
         heapq.heappush(self._free, int(row))
+        self.layout_version += 1
 
     def clear(self) -> None:
-        """Free every row (used by ``reset``); capacity is kept."""
+        """Free every row (used by ``reset``); capacity is kept, and rows hold the defaults of
+        fresh ones again (``allocate`` relies on it)."""
+        used = slice(0, self._high_water)
+        self.velocity[used] = 0.0
+        self.angular_velocity[used] = 0.0
+        self.collision_mode[used] = 0
+        self.kinematic[used] = True
         self.active[:] = False
         self.dirty[:] = False
         self.moved[:] = False
@@ -154,6 +174,13 @@ class KinematicState:
         self.object_id[:] = -1
         self._free.clear()
         self._high_water = 0
+        self.layout_version += 1
+
+    def set_collision_code(self, row: int, code: int) -> None:
+        """Change a row's collision mode code (and flag it moved, so its pairs are re-checked)."""
+        self.collision_mode[row] = code
+        self.moved[row] = True
+        self.layout_version += 1
 
     def mark_moved(self, rows: int | np.ndarray) -> None:
         """Flag rows whose pose changed: stale in PyBullet, unseen by the collision system."""
@@ -193,6 +220,6 @@ class KinematicState:
         self.orientation[old_cap:, 3] = 1.0
         for name in ("kinematic", "active", "dirty", "moved"):
             old = getattr(self, name)
-            grown = np.zeros(new_cap, dtype=bool)
+            grown = np.full(new_cap, name == "kinematic", dtype=bool)  # fresh rows: kinematic
             grown[: old.shape[0]] = old
             setattr(self, name, grown)

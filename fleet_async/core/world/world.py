@@ -20,6 +20,12 @@ from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.carrying import Carrying
+from fleet_async.core.world.pending import (
+    PENDING_BODY,
+    Deferred,
+    PendingBodies,
+    PendingBodiesApi,
+)
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
@@ -32,7 +38,7 @@ __all__ = ["World"]
 logger = logging.getLogger(__name__)
 
 
-class World(Carrying):
+class World(Carrying, PendingBodiesApi):
     """Objects, rows and attachments of one simulation.
 
     Args:
@@ -67,7 +73,17 @@ class World(Carrying):
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._saved_mass: dict[int, float] = {}
         self._next_id = 0
+        self._entity_buses = False
+        self._pending = PendingBodies()
+        self._body_list_stale = False
+        self._expected: Deferred | None = None
         self.in_step = False
+
+    @property
+    def client(self) -> int:
+        """The PyBullet client id, without creating pending bodies first (for spawning code
+        that makes shapes and bodies; raw PyBullet calls use ``sim.client``)."""
+        return self._backend.client
 
     @property
     def store(self) -> KinematicState:
@@ -98,6 +114,16 @@ class World(Carrying):
     def agent_count(self) -> int:
         """Number of agents."""
         return len(self._agents)
+
+    @property
+    def has_entity_buses(self) -> bool:
+        """Whether any object of this simulation has ever had its own event bus (emitters of
+        per-object events can skip building payloads while none has)."""
+        return self._entity_buses
+
+    def on_event_bus_created(self) -> None:
+        """An object of this simulation created its event bus (``obj.events``)."""
+        self._entity_buses = True
 
     def get(self, object_id: int) -> SimObject | None:
         """The object with ``object_id``, or None."""
@@ -134,6 +160,8 @@ class World(Carrying):
         ):
             registry.clear()
         self._attachments.clear()
+        self._pending.clear()
+        self._body_list_stale = False
         self._saved_mass.clear()
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._store.clear()
@@ -148,11 +176,17 @@ class World(Carrying):
         if obj.sim_core is not None or obj.object_id >= 0:
             owner = "this" if obj.sim_core is self._sim else "another"
             raise ValueError(f"add_object: {obj!r} already belongs to {owner} simulation")
-        body = obj.body_id
+        body = obj.raw_body_id
         solo = obj.standalone_state
         pos: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
         orn: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0, 1.0)
-        if body >= 0 and not (solo is not None and solo.pose_written):
+        pending = None
+        if body == PENDING_BODY:
+            if self._expected is None:
+                raise ValueError(f"add_object: {obj!r} has a pending body nobody described")
+            pending, pos, orn = self._expected
+            self._expected = None
+        elif body >= 0 and not (solo is not None and solo.pose_written):
             pos, orn = self._backend.read_pose(body)
         elif obj.state_row >= 0:  # the pose it kept outside a simulation
             pose = obj.get_pose()
@@ -177,9 +211,13 @@ class World(Carrying):
             self._updaters[object_id] = obj
         if obj.has_callbacks():
             self._with_callbacks[object_id] = obj
-        self.on_entity_handlers_changed(obj)
+        if obj.has_event_bus():
+            self._entity_buses = True
+            self.on_entity_handlers_changed(obj)
         if dynamic:
             self._dynamic_rows = np.append(self._dynamic_rows, row)
+        if pending is not None:
+            self._pending.add(pending, row, obj)
         if obj.collision_mode is CollisionMode.DISABLED and body >= 0:
             p.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self._backend.client)
         if solo is not None:
@@ -232,7 +270,10 @@ class World(Carrying):
         ):
             registry.pop(object_id, None)
         self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
-        self._backend.remove_body(obj.body_id)
+        if obj.raw_body_id == PENDING_BODY:
+            self._pending.discard(row)
+        else:
+            self._backend.remove_body(obj.raw_body_id)
         try:
             # Handlers still see the object's id and last pose.
             self._events.emit(SimEvents.OBJECT_REMOVED, sim=self._sim, obj=obj)
@@ -327,8 +368,9 @@ class World(Carrying):
     def on_collision_mode_changed(
         self, obj: SimObject, old: CollisionMode, new: CollisionMode
     ) -> None:
-        """Apply a collision mode change to PyBullet's contact filter."""
-        if obj.body_id < 0:
+        """Apply a collision mode change to PyBullet's contact filter (a pending body gets
+        the filter of its mode when it is created)."""
+        if obj.raw_body_id < 0:
             return
         if new is CollisionMode.DISABLED:
             p.setCollisionFilterGroupMask(

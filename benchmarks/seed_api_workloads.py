@@ -1,0 +1,179 @@
+"""The fleet and spawning workloads written once against the reference API's modules.
+
+The same code runs on fleet_async and on pybullet-fleet 0.8.0 (the incumbent): ``--package``
+picks which package's ``agent`` / ``core_simulation`` / ``geometry`` / ``sim_object`` / ``types``
+modules it imports, the way a user's script ports by renaming its imports. It prints one JSON
+object per run. ``fleet_bench.py --incumbent`` and ``spawn_bench.py --incumbent`` run it with the
+incumbent's interpreter so both sides are measured in the same run of the benchmark.
+
+Workloads:
+
+- ``fleet N``: N box robots (0.1 m cube, kinematic, omni, 2 m/s, 3 rad/s) on a ceil(sqrt(N))
+  grid, 1 m apart at z = 0.1, spawned with ``Agent.from_params`` inside ``sim.batch_spawn()``;
+  half of them (fixed seed) get a goal uniform in (-10, g + 10) on x and y; dt 0.1 s, collision
+  checks every step (CLOSEST_POINTS, margin 0.02 m); 10 warm-up steps, then 100 timed
+  ``step_once()`` calls. The same workload as ``fleet_async.bench``.
+- ``spawn N``: a plain loop of ``Agent.from_mesh`` (the benchmark's cube) or ``Agent.from_urdf``
+  (a shared model) with ``sim_core=sim``, as users write it, timed up to the end of the first
+  ``step_once()`` so that work an implementation defers to the step is counted (``spawn_s``);
+  then ``sim.client`` is read, as raw PyBullet calls do, and its time reported apart
+  (``bodies_s``): fleet_async creates the PyBullet bodies a kinematic fleet never needed
+  then, pybullet-fleet has nothing left to do.
+
+Run:  python benchmarks/seed_api_workloads.py --package fleet_async fleet 1000
+      /tmp/pbf/bin/python benchmarks/seed_api_workloads.py --package pybullet_fleet spawn 10000
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import importlib
+import json
+import math
+import time
+from typing import Any
+
+WARMUP_STEPS = 10
+TIMED_STEPS = 100
+SEED = 42
+
+
+def _modules(package: str) -> dict[str, Any]:
+    return {
+        name: importlib.import_module(f"{package}.{name}")
+        for name in ("agent", "core_simulation", "geometry", "sim_object", "types")
+    }
+
+
+def _sim(m: dict[str, Any]) -> Any:
+    params = m["core_simulation"].SimulationParams(
+        gui=False,
+        monitor=False,
+        target_rtf=0.0,
+        timestep=0.1,
+        collision_detection_method=m["types"].CollisionDetectionMethod.CLOSEST_POINTS,
+        collision_margin=0.02,
+        collision_check_frequency=None,
+        enable_floor=False,
+    )
+    return m["core_simulation"].MultiRobotSimulationCore(params)
+
+
+def _close(sim: Any) -> None:
+    import pybullet as p
+
+    p.disconnect(physicsClientId=sim.client)
+
+
+def fleet(m: dict[str, Any], n: int) -> dict[str, Any]:
+    """Step time of the fleet workload (see the module docstring)."""
+    import numpy as np
+
+    agent_mod, pose_cls = m["agent"], m["geometry"].Pose
+    sim = _sim(m)
+    side = math.ceil(math.sqrt(n))
+    cube = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.05, 0.05, 0.05])
+    controller = {"type": "omni", "max_linear_vel": 2.0, "max_angular_vel": 3.0}
+    t0 = time.perf_counter()
+    with sim.batch_spawn():
+        agents = [
+            agent_mod.Agent.from_params(
+                agent_mod.AgentSpawnParams(
+                    visual_shape=cube,
+                    collision_shape=cube,
+                    initial_pose=pose_cls.from_xyz(float(i % side), float(i // side), 0.1),
+                    mass=0.0,
+                    controller=controller,
+                ),
+                sim_core=sim,
+            )
+            for i in range(n)
+        ]
+    spawn_s = time.perf_counter() - t0
+    rng = np.random.default_rng(SEED)
+    movers = rng.choice(n, size=n // 2, replace=False)
+    goals = rng.uniform(-10.0, side + 10.0, size=(len(movers), 2))
+    for idx, (gx, gy) in zip(movers.tolist(), goals.tolist(), strict=True):
+        agents[idx].set_goal_pose(pose_cls.from_xyz(gx, gy, 0.1))
+    for _ in range(WARMUP_STEPS):
+        sim.step_once()
+    gc.collect()
+    t0 = time.perf_counter()
+    for _ in range(TIMED_STEPS):
+        sim.step_once()
+    step_ms = (time.perf_counter() - t0) * 1000.0 / TIMED_STEPS
+    _close(sim)
+    return {"workload": "fleet", "n": n, "step_ms": step_ms, "spawn_s": spawn_s}
+
+
+def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
+    """Wall time of a per-agent spawning loop, up to the end of the first step."""
+    agent_cls, pose_cls = m["agent"].Agent, m["geometry"].Pose
+    sim = _sim(m)
+    side = math.ceil(math.sqrt(n))
+    cube = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.05, 0.05, 0.05])
+    controller = {"type": "omni", "max_linear_vel": 2.0, "max_angular_vel": 3.0}
+    gc.collect()
+    t0 = time.perf_counter()
+    if kind == "mesh":
+        for i in range(n):
+            agent_cls.from_mesh(
+                visual_shape=cube,
+                collision_shape=cube,
+                pose=pose_cls.from_xyz(float(i % side), float(i // side), 0.1),
+                mass=0.0,
+                sim_core=sim,
+                controller=controller,
+            )
+    else:
+        for i in range(n):
+            agent_cls.from_urdf(
+                urdf_path=model,
+                pose=pose_cls.from_xyz(float(i % side), float(i // side), 0.1),
+                mass=0.0,
+                sim_core=sim,
+                controller=controller,
+            )
+    loop_s = time.perf_counter() - t0
+    sim.step_once()
+    total_s = time.perf_counter() - t0
+    # Raw PyBullet access: fleet_async creates the bodies it had no need for until now.
+    t1 = time.perf_counter()
+    p_client = sim.client
+    bodies_s = time.perf_counter() - t1
+    del p_client
+    _close(sim)
+    return {
+        "workload": f"spawn_{kind}",
+        "n": n,
+        "loop_s": loop_s,
+        "spawn_s": total_s,
+        "bodies_s": bodies_s,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry: run one workload and print its JSON result."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--package", default="fleet_async", help="fleet_async or pybullet_fleet")
+    sub = parser.add_subparsers(dest="workload", required=True)
+    fleet_p = sub.add_parser("fleet", help="step time of the fleet workload")
+    fleet_p.add_argument("n", type=int)
+    spawn_p = sub.add_parser("spawn", help="per-agent spawning loop + first step")
+    spawn_p.add_argument("n", type=int)
+    spawn_p.add_argument("--kind", choices=("mesh", "urdf"), default="mesh")
+    spawn_p.add_argument("--model", default="mobile_robot", help="URDF model for --kind urdf")
+    args = parser.parse_args(argv)
+    m = _modules(args.package)
+    if args.workload == "fleet":
+        result = fleet(m, args.n)
+    else:
+        result = spawn(m, args.n, args.kind, args.model)
+    result["package"] = args.package
+    print(json.dumps(result), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

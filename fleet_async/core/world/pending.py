@@ -1,0 +1,198 @@
+"""Bodies spawned one at a time but created in PyBullet together.
+
+A loop of ``Agent.from_mesh`` / ``SimObject.from_params`` on a headless simulation does not call
+``createMultiBody`` once per object: each object gets its row (its pose, its handle, its
+collision mode) at once and its body is *pending*. A kinematic simulation needs no PyBullet
+body to move its objects or to check their collisions (poses live in the state store; box pairs
+are measured with numpy and other shapes are queried as (shape, pose)), so pending bodies are
+created only when something needs PyBullet's view: reading an object's ``body_id``,
+``sim.client`` (raw PyBullet calls), ``sim.sync_pybullet()``, a recording, a physics step, a
+contact-point or compound-body query. Then all of them are created at once, in one
+``createMultiBody(batchPositions=...)`` call per group of identical shapes and mass (about ten
+times cheaper per body than one call each). The first body of each shape is created as soon as
+the collision system registers it, to measure the shape.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pybullet as p
+
+from fleet_async.core.world.shapes import record_body_shape
+from fleet_async.core.world.state import COLLISION_CODES, KinematicState
+
+if TYPE_CHECKING:
+    from fleet_async.core.bodies.sim_object import SimObject
+    from fleet_async.core.world.backend import PyBulletBackend
+
+__all__ = ["PENDING_BODY", "Deferred", "PendingBodies", "PendingBodiesApi", "PendingBody"]
+
+PENDING_BODY = -2
+"""The body id of an object whose PyBullet body is not created yet."""
+
+# PyBullet's batch creation is limited by its command buffer; chunks keep every call safe.
+_CHUNK = 4096
+_DISABLED = COLLISION_CODES["disabled"]
+
+
+@dataclass(frozen=True)
+class PendingBody:
+    """What it takes to create one body later: its shapes (PyBullet ids, -1 for none) and
+    mass (kg); the pose is the row's pose at creation time."""
+
+    visual_shape: int
+    collision_shape: int
+    mass: float
+
+
+class PendingBodies:
+    """Bodies waiting to be created, grouped by (visual shape, collision shape, mass)."""
+
+    def __init__(self) -> None:
+        self._groups: dict[PendingBody, dict[int, SimObject]] = {}  # row -> handle, in order
+        self._of_row: dict[int, PendingBody] = {}
+
+    def collision_shape(self, row: int) -> int:
+        """The collision shape the pending body of ``row`` will have (-1: none pending)."""
+        body = self._of_row.get(row)
+        return -1 if body is None else body.collision_shape
+
+    def __len__(self) -> int:
+        return len(self._of_row)
+
+    def add(self, body: PendingBody, row: int, obj: SimObject) -> None:
+        """Queue the body of ``obj`` (which holds ``row``)."""
+        self._groups.setdefault(body, {})[row] = obj
+        self._of_row[row] = body
+
+    def discard(self, row: int) -> None:
+        """Forget the pending body of ``row`` (its object left before it was created)."""
+        body = self._of_row.pop(row, None)
+        if body is not None:
+            del self._groups[body][row]
+
+    def clear(self) -> None:
+        """Forget every pending body (the world is being reset)."""
+        self._groups.clear()
+        self._of_row.clear()
+
+    def create_one(self, row: int, store: KinematicState, client: int) -> None:
+        """Create the pending body of ``row`` alone (to measure its shape)."""
+        body = self._of_row.pop(row, None)
+        if body is None:
+            return
+        obj = self._groups[body].pop(row)
+        _place(body, {row: obj}, store, client)
+
+    def create_all(self, store: KinematicState, client: int) -> bool:
+        """Create every pending body at its row's current pose, in spawn order per group, and
+        hand each object its body id.
+
+        Returns:
+            Whether PyBullet's client-side body list now lacks some of them (a batch of more
+            than one body tells the client only about its last body; ``syncBodyInfo`` fixes
+            that, at about 80 us per body in the world, so it is left to whoever needs it).
+        """
+        groups, self._groups = self._groups, {}
+        self._of_row.clear()
+        partial = False
+        for body, members in groups.items():
+            partial |= _place(body, members, store, client)
+        return partial
+
+
+def _place(
+    body: PendingBody, members: dict[int, SimObject], store: KinematicState, client: int
+) -> bool:
+    """Create ``members``' bodies in chunks; return whether a chunk held more than one."""
+    rows = list(members)
+    partial = False
+    for start in range(0, len(rows), _CHUNK):
+        chunk = np.array(rows[start : start + _CHUNK], dtype=np.int64)
+        ids = _create(body, store, chunk, client)
+        partial |= len(ids) > 1
+        store.body_id[chunk] = ids
+        store.dirty[chunk] = False
+        for row, body_id in zip(chunk.tolist(), ids, strict=True):
+            members[row].bind_body(body_id)
+            record_body_shape(client, body_id, body.collision_shape)
+        for row in chunk[store.collision_mode[chunk] == _DISABLED].tolist():
+            p.setCollisionFilterGroupMask(int(store.body_id[row]), -1, 0, 0, physicsClientId=client)
+    return partial
+
+
+def _create(body: PendingBody, store: KinematicState, rows: np.ndarray, client: int) -> list[int]:
+    """Create one body per row in one PyBullet call; set the rotated ones' orientations."""
+    positions = store.position[rows].tolist()
+    created = p.createMultiBody(
+        baseMass=body.mass,
+        baseCollisionShapeIndex=body.collision_shape,
+        baseVisualShapeIndex=body.visual_shape,
+        basePosition=positions[0],
+        batchPositions=positions,
+        physicsClientId=client,
+    )
+    ids = [int(b) for b in created] if isinstance(created, (list, tuple)) else [int(created)]
+    if len(ids) != len(rows) or min(ids) < 0:
+        for b in ids:
+            if b >= 0:
+                p.removeBody(b, physicsClientId=client)
+        raise RuntimeError(f"PyBullet created {len(ids)} bodies for a batch of {len(rows)}")
+    orn = store.orientation[rows]
+    rotated = np.flatnonzero(orn[:, :3].any(axis=1) | (orn[:, 3] != 1.0))
+    for k in rotated.tolist():
+        p.resetBasePositionAndOrientation(
+            ids[k], positions[k], orn[k].tolist(), physicsClientId=client
+        )
+    return ids
+
+
+Deferred = tuple[PendingBody, "Sequence[float] | np.ndarray", "Sequence[float] | np.ndarray"]
+"""A pending body and the pose (position, orientation) its object joins at."""
+
+
+class PendingBodiesApi:
+    """The world's pending bodies: what handles and the collision system ask about them
+    (mixed into ``World``)."""
+
+    # Provided by World.
+    _pending: PendingBodies
+    _store: KinematicState
+    _backend: PyBulletBackend
+    _body_list_stale: bool
+    _expected: Deferred | None
+
+    @property
+    def has_pending_bodies(self) -> bool:
+        """Whether spawned objects wait for their PyBullet bodies to be created."""
+        return len(self._pending) > 0
+
+    def create_pending_bodies(self) -> None:
+        """Create the PyBullet bodies of every object spawned with a pending body."""
+        if len(self._pending) and self._pending.create_all(self._store, self._backend.client):
+            self._body_list_stale = True
+
+    def create_pending_body(self, row: int) -> None:
+        """Create the pending body of ``row`` alone (the others stay pending)."""
+        self._pending.create_one(row, self._store, self._backend.client)
+
+    def pending_collision_shape(self, row: int) -> int:
+        """The collision shape id of the body ``row`` waits for (-1: no pending body)."""
+        return self._pending.collision_shape(row)
+
+    def sync_body_list(self) -> None:
+        """Make PyBullet's client-side body list (``getBodyInfo``, ``getNumBodies``) know every
+        body created in batches (``pybullet.syncBodyInfo``; about 80 us per body in the
+        world, so only raw access through ``obj.body_id`` asks for it)."""
+        if self._body_list_stale:
+            p.syncBodyInfo(physicsClientId=self._backend.client)
+            self._body_list_stale = False
+
+    def expect_pending(self, deferred: Deferred | None) -> None:
+        """The next object added with body id ``PENDING_BODY`` joins at this (body, position,
+        orientation) and its body is created later, with others; None withdraws it."""
+        self._expected = deferred
