@@ -245,6 +245,10 @@ class Kernel:
         """Whether an event is due now."""
         return bool(self.queue) and self.queue[0][0] <= self.now
 
+    def steps_to_next(self) -> int | None:
+        """Steps until the earliest queued event (None if the queue is empty)."""
+        return self.queue[0][0] - self.now if self.queue else None
+
     def nothing_due(self) -> bool:
         """Whether no queued event will ever resume anything."""
         return len(self.queue) == self.dead

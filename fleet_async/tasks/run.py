@@ -195,7 +195,7 @@ class _Driver:
             if stuck and self.until_step is None and rtf <= 0:
                 raise _deadlock(runtime)
             before = sim.step_count
-            runtime.step()
+            self._advance()
             if sim.step_count == before:
                 raise RuntimeError(
                     "the simulation did not advance (is it paused?): missions wait on sim "
@@ -209,6 +209,27 @@ class _Driver:
             if time.perf_counter() >= checkpoint_at:  # behind real time, or unpaced
                 await anyio.lowlevel.checkpoint()
                 checkpoint_at = time.perf_counter() + _YIELD_EVERY
+
+    def _advance(self) -> None:
+        """Run the next step, or jump over every step before the next due event at once when
+        the simulation says they are empty (nothing moves, nothing is due: the clock and the
+        schedules advance exactly as if they had run). A predicate that a mission waits on
+        is checked after every step, so it keeps the steps. A paced run jumps at most
+        ``_YIELD_EVERY`` wall seconds' worth at a time, so the outside world is still served
+        between jumps."""
+        runtime, kernel, sim = self.runtime, self.runtime.kernel, self.runtime.sim
+        gap = kernel.steps_to_next()
+        if self.until_step is not None:
+            left = self.until_step - kernel.now
+            gap = left if gap is None else min(gap, left)
+        rtf = sim.params.target_rtf
+        if gap is not None and rtf > 0:  # paced: jump no further than the outside world waits
+            gap = min(gap, max(1, int(_YIELD_EVERY * rtf / sim.params.timestep)))
+        skippable = gap is not None and gap > 0 and not runtime.watches_predicates()
+        if skippable and sim.skip_idle_steps(gap):
+            kernel.now = sim.step_count
+            return
+        runtime.step()
 
     async def _stop_at_until(self) -> None:
         """Cancel every mission; let their cleanup run at this step (no more steps). The

@@ -96,6 +96,10 @@ class Runtime:
             or any(wait.callbacks for table in self.bus_waits.values() for wait in table.values())
         )
 
+    def watches_predicates(self) -> bool:
+        """Whether a mission waits on a ``sim.wait_until`` predicate (checked every step)."""
+        return bool(self.predicates) and any(wait.callbacks for wait in self.predicates.values())
+
     def outcome(self, wait: ActionWait) -> None:
         """An awaited action ended during the step: order it among the step's outcomes."""
         self.kernel.seq += 1

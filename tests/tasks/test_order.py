@@ -620,3 +620,42 @@ async def test_two_missions_can_wait_on_one_action(fleet_sim):
     await first
     await watching
     assert ended == [10] and fleet_sim.step_count == 10
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_the_driver_jumps_over_empty_steps_exactly(backend):
+    """Missions that wait on timers while nothing moves: the driver skips the empty steps in
+    one go, and everything happens at the same sim times as when every step runs."""
+
+    def trace(keep_every_step: bool) -> tuple[list, int, int]:
+        with _sim(dt=0.5) as sim:
+            robot = _robot(sim)
+            log, skipped = [], []
+            if keep_every_step:  # a per-step subscriber: no step may be skipped
+                sim.events.on(fa.SimEvents.POST_STEP, lambda **_: None)
+            sim.events.on(fa.SimEvents.STEPS_SKIPPED, lambda count, **_: skipped.append(count))
+            sim.register_callback(lambda sim, dt: log.append(("tick", sim.step_count)), 0.1)
+
+            async def sleeper(name, period):
+                for _ in range(4):
+                    await sim.sleep(period)
+                    log.append((name, sim.step_count))
+
+            async def mover():
+                await sim.sleep(7)
+                await robot.move(Pose.from_xyz(2, 0, 0.1))
+                log.append(("moved", sim.step_count, round(robot.get_pose().x, 6)))
+
+            async def main():
+                async with sim.task_group() as tg:
+                    tg.start_soon(sleeper, "a", 3.0)
+                    tg.start_soon(sleeper, "b", 5.5)
+                    tg.start_soon(mover)
+
+            fa.run(sim, main, backend=backend)
+            return log, sim.step_count, sum(skipped)
+
+    skipping, steps, skipped = trace(keep_every_step=False)
+    every_step, steps_again, none = trace(keep_every_step=True)
+    assert skipping == every_step and steps == steps_again == 44
+    assert skipped > 20 and none == 0

@@ -80,15 +80,16 @@ class IdleSteps:
         if limit <= 0 or self._blocked():
             return 0
         has = self._events.has_handlers
-        if any(has(event) for event in _PER_STEP_EVENTS):
+        pre_step, post_step, pre_update, post_update = _PER_STEP_EVENTS
+        if has(pre_step) or has(post_step) or has(pre_update) or has(post_update):
             return 0
         world = self._world
-        if world.updaters() or world.has_update_listeners():
+        if world.has_updaters() or world.has_update_listeners() or len(self._joints):
             return 0
-        if len(self._joints) or any(
-            m is not self._fleet and m is not self._joints for m in self._motion_systems()
-        ):
-            return 0
+        fleet, joints = self._fleet, self._joints
+        for system in self._motion_systems():
+            if system is not fleet and system is not joints:
+                return 0
         free = self._collision.idle_steps(step, limit)
         if free:
             free = self._fleet.idle_steps(step, free)
@@ -97,10 +98,11 @@ class IdleSteps:
             if not free:
                 return 0
             free = schedule.steps_until_due(step, dt, free)
-        for obj in world.objects_with_callbacks():
-            if not free:
-                return 0
-            free = obj.callback_steps_until_due(step, dt, free)
+        if world.has_object_callbacks():
+            for obj in world.objects_with_callbacks():
+                if not free:
+                    return 0
+                free = obj.callback_steps_until_due(step, dt, free)
         return free
 
     def skip(self, step: int, n: int) -> None:
@@ -175,6 +177,16 @@ class IdleApi:
                 f"skip_steps: {n} steps are not provably empty from step {self._step_count} "
                 f"(idle_steps says {max(self.idle_steps(max(n, 0)), 0)}); run step_once()"
             )
+        self._skip(n)
+
+    def skip_idle_steps(self, limit: int) -> int:
+        """Skip as many of the next ``limit`` steps as are provably empty, in one look
+        (``idle_steps`` then ``skip_steps``, without checking twice); return how many."""
+        n = self.idle_steps(limit)
+        self._skip(n)
+        return n
+
+    def _skip(self, n: int) -> None:
         if n == 0:
             return
         first = self._step_count

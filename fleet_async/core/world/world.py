@@ -398,6 +398,14 @@ class World(Carrying, PendingBodiesApi):
         else:
             self._update_listeners.pop(obj.object_id, None)
 
+    def has_updaters(self) -> bool:
+        """Whether any object's class overrides ``update(dt)`` (cheaper than ``updaters()``)."""
+        return bool(self._updaters)
+
+    def has_object_callbacks(self) -> bool:
+        """Whether any object has per-object callbacks."""
+        return bool(self._with_callbacks)
+
     def has_update_listeners(self) -> bool:
         """Whether any object listens to its own PRE_UPDATE / POST_UPDATE."""
         return bool(self._update_listeners)
