@@ -43,6 +43,7 @@ from fleet_async.core.scenario import ScenarioApi
 from fleet_async.core.scheduling import PeriodicSchedule
 from fleet_async.core.sim_object import SimObject
 from fleet_async.core.state import KinematicState
+from fleet_async.core.trace import TraceApi
 from fleet_async.core.types import SpatialHashCellSizeMode, coerce_enum
 from fleet_async.core.world import World
 from fleet_async.core.world_loader import WorldLoadingApi
@@ -61,7 +62,7 @@ class MotionSystem(Protocol):
         """Move every object this system owns by one step of ``dt`` seconds."""
 
 
-class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, RecordingApi):
+class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, RecordingApi, TraceApi):
     """A multi-robot simulation on one PyBullet client.
 
     Args:
@@ -554,8 +555,10 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
         """Remove every object, rebuild the PyBullet world and zero the clock.
 
         Callbacks, plugins (which get ``on_reset``) and managers (cleared) are kept. The random
-        generator is reseeded with ``seed``, or with ``params.seed``.
+        generator is reseeded with ``seed``, or with ``params.seed``. A running trace is
+        finished first (its clock cannot go back).
         """
+        self.stop_trace()
         self._fleet.reset()  # first: unfinished actions end CANCELLED while agents are bound
         self._joint_motion.reset()
         removed = self._world.clear()
@@ -571,7 +574,9 @@ class MultiRobotSimulationCore(SimMissionApi, ScenarioApi, WorldLoadingApi, Reco
             plugin.on_reset()
 
     def close(self) -> None:
-        """Disconnect from PyBullet; the simulation cannot step afterwards."""
+        """Finish a running trace and disconnect from PyBullet; the simulation cannot step
+        afterwards."""
+        self.stop_trace()
         if self._monitor is not None:
             self._monitor.monitor.stop()
             self._monitor = None
