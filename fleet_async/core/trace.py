@@ -171,11 +171,11 @@ class _FrameBuffer:
         self.count = 0
         return [
             FRAMES_HEADER.pack(k, n),
-            memoryview(self.steps[:k]),
-            memoryview(self.pos[:k]).cast("B"),
-            memoryview(self.yaw[:k]).cast("B"),
+            memoryview(self.steps[:k].view(np.uint8)),
+            memoryview(self.pos[:k].reshape(-1).view(np.uint8)),
+            memoryview(self.yaw[:k].reshape(-1).view(np.uint8)),
             bytes(_pad(2 * k * n)),
-            memoryview(self.flags[:k]),
+            memoryview(self.flags[:k].reshape(-1)),
         ]
 
 

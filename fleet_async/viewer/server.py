@@ -164,7 +164,12 @@ class ViewerServer(ThreadingHTTPServer):
         return thread
 
     def stop(self) -> None:
-        """Stop serving (live streams end at their next poll) and close the socket."""
+        """Stop a :meth:`start_background` server (live streams end at their next poll)."""
         self.stopping.set()
         self.shutdown()
+        self.server_close()
+
+    def stop_serving(self) -> None:
+        """After ``serve_forever`` returned in this thread: end live streams, close the socket."""
+        self.stopping.set()
         self.server_close()

@@ -214,6 +214,12 @@ class GLRenderer {
 
   // view: {cx, cy, scale (css px per m), width, height, dpr}; scene: {statics, frame0, frame1,
   // alpha, zrange, colorMode}
+  pixelAt(x, y) {   // device pixels from the top left; [r, g, b, a] 0..255
+    const gl = this.gl, out = new Uint8Array(4);
+    gl.readPixels(Math.round(x), this.canvas.height - 1 - Math.round(y), 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, out);
+    return Array.from(out);
+  }
+
   draw(view, scene) {
     const gl = this.gl;
     gl.viewport(0, 0, this.canvas.width, this.canvas.height);
@@ -285,6 +291,11 @@ class PixelRenderer {
       this.buf = new Uint32Array(this.img.data.buffer);
     }
     this.dpr = dpr;
+  }
+
+  pixelAt(x, y) {   // device pixels from the top left; [r, g, b, a] 0..255
+    const v = this.buf[Math.round(y) * this.canvas.width + Math.round(x)];
+    return [v & 255, (v >>> 8) & 255, (v >>> 16) & 255, v >>> 24];
   }
 
   colours(shape) {
@@ -370,8 +381,9 @@ class PixelRenderer {
       const p0 = f0.pos, y0 = f0.yaw, p1 = lerp ? f1.pos : p0, y1 = lerp ? f1.yaw : y0;
       const colliding = f0.colliding.length ? new Set(f0.colliding) : null;
       const k = Math.PI / 32767;
-      // Agents first, then other objects, so a carried box shows on top of its robot.
-      for (const pass of [true, false]) {
+      // Objects first, then agents on top: a robot stays visible (orange: carrying) under
+      // the box it carries, and over the totes it drives past.
+      for (const pass of [false, true]) {
         for (let i = 0; i < n; i++) {
           const b = bodies[i];
           if ((b !== undefined && b.kind === "agent") !== pass) continue;

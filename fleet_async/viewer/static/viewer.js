@@ -425,6 +425,9 @@
     bodyAt,
     fit: () => { view.userMoved = false; fit(); render(); },
     project: (x, y) => { const p = project(x, y); const r = stage.getBoundingClientRect(); return { x: p.x, y: p.y, pageX: r.left + p.x, pageY: r.top + p.y }; },
+    // Colour of the bodies layer at CSS pixel (x, y) of the stage: [r, g, b, a], 0..255.
+    pixelAt: (x, y) => renderer.pixelAt(x * view.dpr, y * view.dpr),
+    stateColours: () => ({ ...STATE_COLOURS }),
     poseOf: (id) => { const i = frameIndex(); return bodyPose(i >= 0 ? data.frames[i] : null, null, 0, id); },
     setZRange: (lo, hi) => { $("zmin").value = lo === null ? "" : String(lo); $("zmax").value = hi === null ? "" : String(hi); dirty = true; render(); },
     setColorMode: (m) => { ui.colorMode = m; $("colour").value = m; dirty = true; render(); },
