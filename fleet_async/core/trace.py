@@ -171,11 +171,11 @@ class _FrameBuffer:
         self.count = 0
         return [
             FRAMES_HEADER.pack(k, n),
-            memoryview(self.steps[:k].view(np.uint8)),
-            memoryview(self.pos[:k].reshape(-1).view(np.uint8)),
-            memoryview(self.yaw[:k].reshape(-1).view(np.uint8)),
+            self.steps[:k].view(np.uint8).data,
+            self.pos[:k].reshape(-1).view(np.uint8).data,
+            self.yaw[:k].reshape(-1).view(np.uint8).data,
             bytes(_pad(2 * k * n)),
-            memoryview(self.flags[:k].reshape(-1)),
+            self.flags[:k].reshape(-1).data,
         ]
 
 

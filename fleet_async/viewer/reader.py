@@ -76,6 +76,8 @@ class TraceReader:
     def __init__(self, path: str | os.PathLike[str], *, allow_unfinished: bool = False) -> None:
         self.path = Path(path)
         self._data = np.memmap(self.path, dtype=np.uint8, mode="r") if self._size() else None
+        # The same bytes as a buffer, for struct (numpy arrays are not typed as buffers).
+        self._bytes: memoryview = self._data.data if self._data is not None else memoryview(b"")
         self.meta: dict[str, Any] = {}
         self.shapes: list[dict[str, Any]] = []
         self.bodies: dict[int, dict[str, Any]] = {}
@@ -105,7 +107,7 @@ class TraceReader:
             raise self._error(
                 f"truncated: {size} bytes, shorter than the {HEADER.size}-byte header"
             )
-        magic, version, header_size, _ = HEADER.unpack_from(data, 0)
+        magic, version, header_size, _ = HEADER.unpack_from(self._bytes, 0)
         if magic != MAGIC:
             raise self._error(
                 f"not a fleet_async trace (magic bytes {magic!r}, expected {MAGIC!r})"
@@ -119,7 +121,7 @@ class TraceReader:
     def _index(self, allow_unfinished: bool) -> None:
         data = self._data
         assert data is not None
-        offset = HEADER.unpack_from(data, 0)[2]
+        offset = HEADER.unpack_from(self._bytes, 0)[2]
         layout = np.zeros(0, dtype=np.int32)
         records = 0
         while offset < len(data):
@@ -129,7 +131,7 @@ class TraceReader:
                     f"{len(data) - offset} of its {RECORD.size} header bytes",
                     self._version,
                 )
-            kind, length = RECORD.unpack_from(data, offset)
+            kind, length = RECORD.unpack_from(self._bytes, offset)
             start = offset + RECORD.size
             if start + length > len(data):
                 name = RecordKind(kind).name if kind in RecordKind._value2member_map_ else kind
@@ -163,10 +165,10 @@ class TraceReader:
             for body in value["bodies"]:
                 self.bodies[int(body["id"])] = body
         elif kind == RecordKind.LAYOUT:
-            (n,) = struct.unpack_from("<I", data, start)
+            (n,) = struct.unpack_from("<I", self._bytes, start)
             layout = np.frombuffer(data, dtype="<i4", count=n, offset=start + 4)
         elif kind == RecordKind.FRAMES:
-            count, n = _FRAMES_HEADER.unpack_from(data, start)
+            count, n = _FRAMES_HEADER.unpack_from(self._bytes, start)
             if n != len(layout):
                 raise self._error(
                     f"FRAMES record at byte {start - RECORD.size} holds {n} bodies per frame, "
@@ -180,7 +182,7 @@ class TraceReader:
                     {"t": t, "step": step, "kind": name, "object_id": object_id, "data": payload}
                 )
         elif kind == RecordKind.COLLISIONS:
-            (n,) = struct.unpack_from("<I", data, start)
+            (n,) = struct.unpack_from("<I", self._bytes, start)
             at = start + 4
             steps, a, b = (
                 np.frombuffer(data, dtype="<i4", count=n, offset=at + 4 * n * i) for i in range(3)

@@ -36,7 +36,7 @@ _POLL_SECONDS = 0.1
 
 
 def _asset(name: str) -> bytes:
-    return resources.files("fleet_async.viewer").joinpath("static", name).read_bytes()
+    return resources.files("fleet_async.viewer").joinpath("static").joinpath(name).read_bytes()
 
 
 class _RecordWalker:
@@ -60,7 +60,7 @@ class _RecordWalker:
 
 
 class _Handler(BaseHTTPRequestHandler):
-    server: ViewerServer  # type: ignore[assignment]  # our server subclass
+    server: ViewerServer
 
     def log_message(self, format: str, *args: Any) -> None:  # the stdlib names it so
         logger.debug("%s - %s", self.address_string(), format % args)

@@ -42,7 +42,10 @@ def robot(sim, x=0.0, y=0.0, name="r"):
 
 def tote(sim, x, y, name="tote"):
     return SimObject.from_mesh(
-        visual_shape=TOTE, collision_shape=TOTE, pose=Pose.from_xyz(x, y, 0.08), sim_core=sim,
+        visual_shape=TOTE,
+        collision_shape=TOTE,
+        pose=Pose.from_xyz(x, y, 0.08),
+        sim_core=sim,
         name=name,
     )
 
@@ -75,8 +78,12 @@ def test_bodies_carry_kind_shape_colour_and_static_pose(sim, tmp_path):
     robot(sim, name="bot")
     tote(sim, 1, 1)
     shelf = SimObject.from_mesh(
-        visual_shape=BOX, collision_shape=BOX, pose=Pose.from_xyz(3, 4, 0.1), sim_core=sim,
-        collision_mode="static", name="shelf",
+        visual_shape=BOX,
+        collision_shape=BOX,
+        pose=Pose.from_xyz(3, 4, 0.1),
+        sim_core=sim,
+        collision_mode="static",
+        name="shelf",
     )
     sim.start_trace(tmp_path / "t.fatrace")
     sim.step_once()
@@ -120,7 +127,9 @@ def test_action_events_and_carrying_flag(sim, tmp_path):
         sim.step_once()
     sim.stop_trace()
     reader = TraceReader(tmp_path / "p.fatrace")
-    mine = [(e["kind"], e["data"]["action"]) for e in reader.events if e["object_id"] == bot.object_id]
+    mine = [
+        (e["kind"], e["data"]["action"]) for e in reader.events if e["object_id"] == bot.object_id
+    ]
     assert mine[:2] == [("action_started", "PickAction"), ("action_ended", "PickAction")]
     ended = [e for e in reader.events if e["kind"] == "action_ended"]
     assert ended[0]["data"]["status"] == "completed"
@@ -203,8 +212,10 @@ def test_same_seed_same_trace(tmp_path):
             for _ in range(40):
                 sim.step_once()
         reader = TraceReader(tmp_path / name)
-        return reader, [(f.step, f.position.tobytes(), f.yaw.tobytes(), f.flags.tobytes())
-                        for f in reader.frames()]
+        return reader, [
+            (f.step, f.position.tobytes(), f.yaw.tobytes(), f.flags.tobytes())
+            for f in reader.frames()
+        ]
 
     (r1, f1), (r2, f2) = run("1.fatrace"), run("2.fatrace")
     assert f1 == f2 and r1.events == r2.events and r1.bodies == r2.bodies

@@ -197,14 +197,14 @@ class GLRenderer {
     gl.bindBuffer(gl.ARRAY_BUFFER, slot.flags); gl.bufferSubData(gl.ARRAY_BUFFER, 0, flags);
   }
 
-  bindSlots(layer, a, b) {
+  bindSlots(layer, a, b, flagsFrom) {
     const gl = this.gl;
     gl.bindVertexArray(layer.vao);
     this.attrib("a_pos0", a.pos, 3, gl.FLOAT, false, 1);
     this.attrib("a_pos1", b.pos, 3, gl.FLOAT, false, 1);
     this.attrib("a_yaw0", a.yaw, 1, gl.SHORT, true, 1);
     this.attrib("a_yaw1", b.yaw, 1, gl.SHORT, true, 1);
-    this.attrib("a_flags", b.flags, 1, gl.UNSIGNED_BYTE, false, 1);
+    this.attrib("a_flags", (flagsFrom || a).flags, 1, gl.UNSIGNED_BYTE, false, 1);
   }
 
   resize(w, h, dpr) {
@@ -252,7 +252,7 @@ class GLRenderer {
       this.upload(layer, s0, f0, false);
       const same = f1 && f1.layout === f0.layout;
       if (same) this.upload(layer, s1, f1, false);
-      this.bindSlots(layer, s0, same ? s1 : s0);
+      this.bindSlots(layer, s0, same ? s1 : s0, same && scene.alpha > 0.5 ? s1 : s0);
       gl.uniform1f(u.u_alpha, same ? scene.alpha : 0);
       const dbg = window.viewer ? window.viewer.debug : {};
       gl.drawArraysInstanced(gl.TRIANGLES, 0, 6, dbg.maxInstances ? Math.min(dbg.maxInstances, layer.n) : layer.n);

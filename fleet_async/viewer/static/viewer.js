@@ -291,24 +291,28 @@
 
   // ----- picking and the side panel -----------------------------------------------------------
 
+  // The body under CSS pixel (px, py): the nearest robot there, else the nearest other body.
   function bodyAt(px, py) {
     const i = frameIndex();
     const f0 = i >= 0 ? data.frames[i] : null;
     const w = unproject(px, py);
     const [z0, z1] = zrange();
-    let best = null, bestD = Infinity;
-    const consider = (id, x, y, z, shape) => {
+    const best = { agent: null, agentD: Infinity, other: null, otherD: Infinity };
+    const consider = (id, x, y, z, body) => {
       if (z < z0 || z > z1) return;
+      const shape = body ? body.shapeInfo : null;
       const reach = Math.max(shape ? (shape.radius || Math.hypot(shape.half[0], shape.half[1])) : 0.1, 6 / view.scale);
       const d = Math.hypot(x - w.x, y - w.y);
-      if (d <= reach && d < bestD) { best = id; bestD = d; }
+      if (d > reach) return;
+      if (body && body.kind === "agent") { if (d < best.agentD) { best.agent = id; best.agentD = d; } }
+      else if (d < best.otherD) { best.other = id; best.otherD = d; }
     };
     if (f0) {
       const bodies = layoutBodies(f0.layout);
-      for (let k = 0; k < f0.layout.n; k++) consider(f0.layout.ids[k], f0.pos[3 * k], f0.pos[3 * k + 1], f0.pos[3 * k + 2], bodies[k] && bodies[k].shapeInfo);
+      for (let k = 0; k < f0.layout.n; k++) consider(f0.layout.ids[k], f0.pos[3 * k], f0.pos[3 * k + 1], f0.pos[3 * k + 2], bodies[k]);
     }
-    if (best === null && statics) for (const b of statics.bodies) consider(b.id, b.pose[0], b.pose[1], b.pose[2], b.shapeInfo);
-    return best;
+    if (statics) for (const b of statics.bodies) consider(b.id, b.pose[0], b.pose[1], b.pose[2], b);
+    return best.agent !== null ? best.agent : best.other;
   }
 
   function select(id) {
