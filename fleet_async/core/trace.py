@@ -22,7 +22,9 @@ import json
 import logging
 import math
 import os
+import queue
 import struct
+import threading
 import time
 from collections.abc import Callable
 from enum import IntEnum
@@ -99,12 +101,16 @@ def _pad(n: int) -> int:
 
 
 class _FrameBuffer:
-    """K frames of N bodies as numpy arrays, written as one FRAMES record."""
+    """Up to K frames of N bodies as numpy arrays, written as one FRAMES record.
 
-    def __init__(self, ids: np.ndarray, rows: np.ndarray) -> None:
+    The step loop copies positions and yaw in (:meth:`capture`); the writer thread derives
+    the moving flag and writes the chunk (:meth:`payload`).
+    """
+
+    def __init__(self, ids: np.ndarray, rows: np.ndarray, pool: queue.Queue[_FrameBuffer]) -> None:
         n = len(ids)
         self.ids = ids
-        self.rows = rows
+        self.pool = pool
         # Contiguous rows (the usual case) are read by slicing, which is cheaper than gathering.
         contiguous = n > 0 and int(rows[-1]) - int(rows[0]) == n - 1
         self.sel: slice | np.ndarray = (
@@ -114,10 +120,10 @@ class _FrameBuffer:
         self.steps = np.zeros(self.capacity, dtype=np.int32)
         self.pos = np.zeros((self.capacity, n, 3), dtype=np.float32)
         self.yaw = np.zeros((self.capacity, n), dtype=np.int16)
+        self.extra = np.zeros((self.capacity, n), dtype=np.uint8)  # carrying / failed bits
         self.flags = np.zeros((self.capacity, n), dtype=np.uint8)
         self.count = 0
-        self._scratch = np.empty((3, n))
-        self._speed = np.empty(n, dtype=bool)
+        self._scratch = np.empty((2, n))
         # object id -> index in the frame (-1: not in it), for setting flag bits in bulk
         self.lookup = np.full(int(ids.max()) + 1 if n else 0, -1, dtype=np.int64)
         self.lookup[ids] = np.arange(n)
@@ -130,53 +136,141 @@ class _FrameBuffer:
         return where[where >= 0]
 
     def capture(self, step: int, store: Any, extra_flags: np.ndarray | None) -> None:
+        """Copy one frame out of the state store (the simulation's thread).
+
+        Only what the frame needs crosses the memory bus here: float32 positions and the
+        int16 yaw (a step at fleet scale has just evicted the store from the caches, so the
+        copy is bound by memory traffic, not arithmetic).
+        """
         k, sel = self.count, self.sel
         self.steps[k] = step
         self.pos[k] = store.position[sel]
         quat = store.orientation[sel]
-        a, b, c = self._scratch
+        a, b = self._scratch
         x, y, z, w = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
         # yaw = atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)), in preallocated arrays
         np.multiply(w, z, out=a)
-        np.multiply(x, y, out=c)
-        a += c
+        a += x * y
         a *= 2.0
         np.multiply(y, y, out=b)
-        np.multiply(z, z, out=c)
-        b += c
+        b += z * z
         b *= -2.0
         b += 1.0
         np.arctan2(a, b, out=a)
         a *= 1.0 / YAW_SCALE
         np.rint(a, out=a)
         self.yaw[k] = a
-        vel, ang = store.velocity[sel], store.angular_velocity[sel]
-        np.multiply(vel[:, 0], vel[:, 0], out=a)
-        np.multiply(vel[:, 1], vel[:, 1], out=b)
-        a += b
-        np.multiply(vel[:, 2], vel[:, 2], out=b)
-        a += b
-        np.multiply(ang[:, 2], ang[:, 2], out=b)
-        a += b
-        np.greater(a, 1e-12, out=self._speed)
-        flags = self.flags[k]
-        flags[:] = self._speed  # FLAG_MOVING is bit 0
-        if extra_flags is not None:
-            flags |= extra_flags
+        self.extra[k] = 0 if extra_flags is None else extra_flags
         self.count += 1
 
-    def payload(self) -> list[Any]:
-        """The FRAMES payload as buffers to write in order (no copy of the arrays)."""
+    def payload(self, previous: tuple[np.ndarray, np.ndarray] | None) -> list[Any]:
+        """The FRAMES payload as buffers to write in order (the writer thread).
+
+        FLAG_MOVING is set here: a body moves in a frame when its position or yaw differs
+        from the frame before (``previous``: (positions, yaws) of the frame before the chunk's
+        first, in the same layout, or None).
+        """
         k, n = self.count, len(self.ids)
-        self.count = 0
+        pos, yaw, flags = self.pos[:k], self.yaw[:k], self.flags[:k]
+        np.copyto(flags, self.extra[:k])
+        if k > 1:
+            moved = (pos[1:] != pos[:-1]).any(axis=2) | (yaw[1:] != yaw[:-1])
+            flags[1:] |= moved.astype(np.uint8)
+        if previous is not None and k:
+            first = (pos[0] != previous[0]).any(axis=1) | (yaw[0] != previous[1])
+            flags[0] |= first.astype(np.uint8)
         return [
             FRAMES_HEADER.pack(k, n),
             self.steps[:k].view(np.uint8).data,
-            self.pos[:k].reshape(-1).view(np.uint8).data,
-            self.yaw[:k].reshape(-1).view(np.uint8).data,
+            pos.reshape(-1).view(np.uint8).data,
+            yaw.reshape(-1).view(np.uint8).data,
             bytes(_pad(2 * k * n)),
-            self.flags[:k].reshape(-1).data,
+            flags.reshape(-1).data,
         ]
+
+    def last_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of the last frame's positions and yaws."""
+        return self.pos[self.count - 1].copy(), self.yaw[self.count - 1].copy()
+
+    def release(self) -> None:
+        """Written: empty, back to the pool of its layout."""
+        self.count = 0
+        self.pool.put(self)
+
+
+class _RecordThread:
+    """Writes records to the file on a background thread, in the order they were queued.
+
+    The simulation's thread hands over immutable bytes, or a frame buffer it no longer
+    touches (it fills the other buffer of the pool meanwhile). A write error is raised on the
+    simulation's thread at the next record or at :meth:`close`.
+    """
+
+    def __init__(self, file: BinaryIO) -> None:
+        self._file = file
+        self._queue: queue.Queue[tuple[int, list[Any] | None, _FrameBuffer | None] | None] = (
+            queue.Queue()
+        )
+        self._error: BaseException | None = None
+        # (layout's buffer pool, (positions, yaws) of the last frame written in that layout)
+        self._last: tuple[Any, tuple[np.ndarray, np.ndarray]] | None = None
+        self._thread = threading.Thread(target=self._run, name="fleet-async-trace", daemon=True)
+        self._thread.start()
+
+    def put(
+        self, kind: int, parts: list[Any] | None = None, frames: _FrameBuffer | None = None
+    ) -> None:
+        self._raise_error()
+        self._queue.put((kind, parts, frames))
+
+    def sync(self) -> None:
+        """Wait until everything queued is written and flushed."""
+        self._queue.join()
+        self._raise_error()
+
+    def close(self) -> None:
+        """Write everything queued, stop the thread and close the file."""
+        self._queue.put(None)
+        self._thread.join()
+        self._file.close()
+        self._raise_error()
+
+    def _raise_error(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
+
+    def _run(self) -> None:
+        while True:
+            item = self._queue.get()
+            if item is None:
+                self._queue.task_done()
+                return
+            kind, parts, frames = item
+            try:
+                if self._error is None:
+                    if frames is not None:
+                        same = self._last is not None and self._last[0] is frames.pool
+                        parts = frames.payload(self._last[1] if same else None)  # type: ignore[index]  # same: not None
+                        self._last = (frames.pool, frames.last_frame())
+                    self._write(kind, parts or [])
+                    if self._queue.empty():
+                        self._file.flush()  # a live viewer reads the file as it grows
+            except BaseException as exc:  # reported on the simulation's thread
+                self._error = exc
+            finally:
+                if frames is not None:
+                    frames.release()
+                self._queue.task_done()
+
+    def _write(self, kind: int, parts: list[Any]) -> None:
+        size = sum(memoryview(part).nbytes for part in parts)
+        self._file.write(RECORD.pack(kind, size))
+        for part in parts:
+            self._file.write(part)
+        pad = _pad(size)
+        if pad:
+            self._file.write(bytes(pad))
 
 
 class TraceWriter:
@@ -218,8 +312,9 @@ class TraceWriter:
         self._every = every_n_steps
         self._flush_seconds = float(flush_seconds)
         self._clock = clock
-        self._file: BinaryIO | None = None
+        self._records: _RecordThread | None = None
         self._frames: _FrameBuffer | None = None
+        self._frame_pool: queue.Queue[_FrameBuffer] | None = None
         self._layout_dirty = True
         self._new_bodies: list[Any] = []
         self._static_ids: set[int] = set()
@@ -230,6 +325,7 @@ class TraceWriter:
         # only append the two objects; ids and steps are resolved in bulk when flushing.
         self._collided: list[list[Any]] = [[], []]  # [ended objects, started objects] (pairs)
         self._collision_marks: list[tuple[int, int, int]] = []  # (step, ended len, started len)
+        self._collision_rows: list[tuple[list[int], list[int], list[int]]] = []  # resolved
         self._failed: set[int] = set()
         self._flag_version = 0  # bumped whenever the failed or colliding sets change
         self._flag_key: tuple[Any, ...] | None = None
@@ -255,7 +351,7 @@ class TraceWriter:
     @property
     def is_tracing(self) -> bool:
         """Whether the writer is between :meth:`start` and :meth:`stop`."""
-        return self._file is not None
+        return self._records is not None
 
     @property
     def frame_count(self) -> int:
@@ -276,11 +372,12 @@ class TraceWriter:
             RuntimeError: if this writer was started before.
             OSError: if the file cannot be created.
         """
-        if self._file is not None or self._last_step >= 0:
+        if self._records is not None or self._last_step >= 0:
             raise RuntimeError(f"TraceWriter({self.path!r}) was already started")
         self._path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = open(self._path, "wb")  # noqa: SIM115  # closed by stop()
-        self._file.write(HEADER.pack(MAGIC, FORMAT_VERSION, HEADER.size, 0))
+        file = open(self._path, "wb")  # noqa: SIM115  # closed by the record thread
+        file.write(HEADER.pack(MAGIC, FORMAT_VERSION, HEADER.size, 0))
+        self._records = _RecordThread(file)
         sim = self._sim
         self._write_json(
             RecordKind.META,
@@ -317,7 +414,7 @@ class TraceWriter:
         Returns:
             The file's path, or None if the writer was not tracing.
         """
-        if self._file is None:
+        if self._records is None:
             return None
         sim = self._sim
         sim.events.off(SimEvents.POST_STEP, self._on_post_step)
@@ -334,10 +431,16 @@ class TraceWriter:
                 "sim_time": self._last_step * sim.params.timestep,
             },
         )
-        self._file.close()
-        self._file = None
+        records, self._records = self._records, None
+        records.close()
         logger.info("saved trace %s (%d frames)", self.path, self._frame_count)
         return self.path
+
+    def flush(self) -> None:
+        """Write every frame and event recorded so far to the file now (and wait for it)."""
+        if self._records is not None:
+            self._flush()
+            self._records.sync()
 
     # ----- events -----------------------------------------------------------------------
 
@@ -363,6 +466,9 @@ class TraceWriter:
         self._layout_dirty = True
 
     def _on_removed(self, obj: Any, **_: Any) -> None:
+        # Pending collision events hold objects; resolve their ids while this one has its id.
+        self._mark_collisions(self._step_stamp())
+        self._resolve_collisions()
         self._layout_dirty = True
         if obj.object_id in self._failed:
             self._failed.discard(obj.object_id)
@@ -491,31 +597,40 @@ class TraceWriter:
         if self._static_ids:
             keep = ~np.isin(ids, np.fromiter(self._static_ids, dtype=np.int64))
             rows, ids = rows[keep], ids[keep]
-        self._frames = _FrameBuffer(ids.astype(np.int32), rows)
+        # Two buffers per layout: one fills while the record thread writes the other.
+        pool: queue.Queue[_FrameBuffer] = queue.Queue()
+        pool.put(_FrameBuffer(ids.astype(np.int32), rows, pool))
+        self._frames = _FrameBuffer(ids.astype(np.int32), rows, pool)
+        self._frame_pool = pool
         self._flag_key = None
         payload = struct.pack("<I", len(ids)) + ids.astype("<i4").tobytes()
         self._write(RecordKind.LAYOUT, payload)
         self._layout_dirty = False
 
     def _flush(self) -> None:
-        """Write buffered events, collisions and frames (in that order)."""
+        """Hand buffered events, collisions and frames (in that order) to the record thread."""
         self._mark_collisions(self._sim.step_count)
         if self._events:
             self._write_json(RecordKind.EVENTS, {"events": self._events})
             self._events = []
-        if self._collision_marks:
+        self._resolve_collisions()
+        if self._collision_rows:
             self._write_collisions()
-        if self._frames is not None and self._frames.count:
-            self._write_parts(RecordKind.FRAMES, self._frames.payload())
-        if self._file is not None:
-            self._file.flush()
+        frames = self._frames
+        if frames is not None and frames.count:
+            assert self._records is not None
+            assert self._frame_pool is not None
+            self._records.put(RecordKind.FRAMES, frames=frames)
+            self._frames = self._frame_pool.get()  # waits only if the disk falls behind
         self._last_flush = self._clock()
 
-    # ----- records ----------------------------------------------------------------------
-
-    def _write_collisions(self) -> None:
-        """One COLLISIONS record: pairs that started or ended, with the step of each."""
-        steps, ids, started = [], [], []
+    def _resolve_collisions(self) -> None:
+        """Turn the pending collision events (objects) into (steps, ids, started) lists."""
+        if not self._collision_marks:
+            return
+        steps: list[int] = []
+        ids: list[int] = []
+        started: list[int] = []
         begin = [0, 0]
         for step, *ends in self._collision_marks:
             for kind in (0, 1):  # ended before started, as the collision system emits them
@@ -527,6 +642,14 @@ class TraceWriter:
                 begin[kind] = ends[kind]
         self._collided = [self._collided[0][begin[0] :], self._collided[1][begin[1] :]]
         self._collision_marks = []
+        self._collision_rows.append((steps, ids, started))
+
+    def _write_collisions(self) -> None:
+        """One COLLISIONS record: pairs that started or ended, with the step of each."""
+        steps = [v for rows in self._collision_rows for v in rows[0]]
+        ids = [v for rows in self._collision_rows for v in rows[1]]
+        started = [v for rows in self._collision_rows for v in rows[2]]
+        self._collision_rows = []
         pairs = np.asarray(ids, dtype=np.int32).reshape(-1, 2)
         self._write_parts(
             RecordKind.COLLISIONS,
@@ -543,14 +666,8 @@ class TraceWriter:
         self._write_parts(kind, [payload])
 
     def _write_parts(self, kind: RecordKind, parts: list[Any]) -> None:
-        assert self._file is not None
-        size = sum(memoryview(part).nbytes for part in parts)
-        self._file.write(RECORD.pack(int(kind), size))
-        for part in parts:
-            self._file.write(part)
-        pad = _pad(size)
-        if pad:
-            self._file.write(bytes(pad))
+        assert self._records is not None
+        self._records.put(int(kind), parts)
 
     def _write_json(self, kind: RecordKind, value: Any) -> None:
         text = json.dumps(value, separators=(",", ":"), default=str, allow_nan=False)

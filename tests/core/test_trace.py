@@ -252,7 +252,7 @@ def test_missing_end_record_is_unfinished(sim, tmp_path):
     writer = sim.start_trace(tmp_path / "live.fatrace")
     for _ in range(3):
         sim.step_once()
-    writer._flush()  # what the periodic flush of a long run leaves on disk
+    writer.flush()  # what the periodic flush of a long run leaves on disk
     with pytest.raises(TraceFormatError, match="no end record"):
         TraceReader(tmp_path / "live.fatrace")
     assert TraceReader(tmp_path / "live.fatrace", allow_unfinished=True).frame_count >= 1
