@@ -10,7 +10,7 @@ per frame (median and 95th percentile, ms).
 
 Needs: pip install "fleet-async[viewer-test]" and Debian's chromium (apt-get install chromium).
 Run:  python benchmarks/viewer_bench.py [--n 10000] [--steps 300] [--seconds 10]
-      [--size 1280x800] [--renderer webgl2|canvas] [--trace FILE] [--json]
+      [--size 1280x800] [--renderer auto|canvas2d|webgl2] [--trace FILE] [--json]
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def measure(path: str, seconds: float, size: tuple[int, int], renderer: str) -> 
     server.start_background()
     try:
         with launch_chromium(viewport=size) as page:
-            query = "?loop=1" + ("&renderer=canvas" if renderer == "canvas" else "")
+            query = f"?loop=1&renderer={renderer}"
             t0 = time.perf_counter()
             page.goto(server.url + query)
             page.wait_for_function(
@@ -85,7 +85,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=300, help="steps recorded (default 300)")
     parser.add_argument("--seconds", type=float, default=10.0, help="measured window (s)")
     parser.add_argument("--size", default="1280x800", help="viewport WxH (default 1280x800)")
-    parser.add_argument("--renderer", choices=("webgl2", "canvas"), default="webgl2")
+    parser.add_argument(
+        "--renderer",
+        choices=("auto", "canvas2d", "webgl2"),
+        default="auto",
+        help="the page's choice (auto: WebGL2 on a hardware GPU, else Canvas2D), or force one",
+    )
     parser.add_argument("--trace", help="measure this trace instead of recording one")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)

@@ -103,8 +103,8 @@ def _pad(n: int) -> int:
 class _FrameBuffer:
     """Up to K frames of N bodies as numpy arrays, written as one FRAMES record.
 
-    The step loop copies positions and yaw in (:meth:`capture`); the writer thread derives
-    the moving flag and writes the chunk (:meth:`payload`).
+    The step loop fills it (:meth:`capture`); the writer thread writes it (:meth:`payload`)
+    while the step loop fills the other buffer of the layout's pool.
     """
 
     def __init__(self, ids: np.ndarray, rows: np.ndarray, pool: queue.Queue[_FrameBuffer]) -> None:
@@ -120,7 +120,6 @@ class _FrameBuffer:
         self.steps = np.zeros(self.capacity, dtype=np.int32)
         self.pos = np.zeros((self.capacity, n, 3), dtype=np.float32)
         self.yaw = np.zeros((self.capacity, n), dtype=np.int16)
-        self.extra = np.zeros((self.capacity, n), dtype=np.uint8)  # carrying / failed bits
         self.flags = np.zeros((self.capacity, n), dtype=np.uint8)
         self.count = 0
         self._scratch = np.empty((2, n))
@@ -135,16 +134,25 @@ class _FrameBuffer:
         where = self.lookup[ids]
         return where[where >= 0]
 
-    def capture(self, step: int, store: Any, extra_flags: np.ndarray | None) -> None:
+    def capture(
+        self,
+        step: int,
+        store: Any,
+        extra_flags: np.ndarray | None,
+        previous: tuple[np.ndarray, np.ndarray] | None,
+    ) -> None:
         """Copy one frame out of the state store (the simulation's thread).
 
-        Only what the frame needs crosses the memory bus here: float32 positions and the
-        int16 yaw (a step at fleet scale has just evicted the store from the caches, so the
-        copy is bound by memory traffic, not arithmetic).
+        Only what the frame needs crosses the memory bus: float32 positions and the int16
+        yaw (a step at fleet scale has just evicted the store from the caches, so this is
+        bound by memory traffic more than by arithmetic). FLAG_MOVING compares with the frame
+        before, which is still in the cache: this buffer's previous frame, or ``previous``
+        (positions, yaws) for the first frame of a chunk.
         """
         k, sel = self.count, self.sel
         self.steps[k] = step
-        self.pos[k] = store.position[sel]
+        pos = self.pos[k]
+        pos[...] = store.position[sel]
         quat = store.orientation[sel]
         a, b = self._scratch
         x, y, z, w = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
@@ -159,33 +167,30 @@ class _FrameBuffer:
         np.arctan2(a, b, out=a)
         a *= 1.0 / YAW_SCALE
         np.rint(a, out=a)
-        self.yaw[k] = a
-        self.extra[k] = 0 if extra_flags is None else extra_flags
+        yaw = self.yaw[k]
+        yaw[...] = a
+        flags = self.flags[k]
+        before = (self.pos[k - 1], self.yaw[k - 1]) if k else previous
+        if before is None:
+            flags[...] = 0
+        else:
+            moved = flags.view(bool)
+            np.not_equal(yaw, before[1], out=moved)  # FLAG_MOVING is bit 0
+            moved |= (pos != before[0]).any(axis=1)
+        if extra_flags is not None:
+            flags |= extra_flags
         self.count += 1
 
-    def payload(self, previous: tuple[np.ndarray, np.ndarray] | None) -> list[Any]:
-        """The FRAMES payload as buffers to write in order (the writer thread).
-
-        FLAG_MOVING is set here: a body moves in a frame when its position or yaw differs
-        from the frame before (``previous``: (positions, yaws) of the frame before the chunk's
-        first, in the same layout, or None).
-        """
+    def payload(self) -> list[Any]:
+        """The FRAMES payload as buffers to write in order (the writer thread)."""
         k, n = self.count, len(self.ids)
-        pos, yaw, flags = self.pos[:k], self.yaw[:k], self.flags[:k]
-        np.copyto(flags, self.extra[:k])
-        if k > 1:
-            moved = (pos[1:] != pos[:-1]).any(axis=2) | (yaw[1:] != yaw[:-1])
-            flags[1:] |= moved.astype(np.uint8)
-        if previous is not None and k:
-            first = (pos[0] != previous[0]).any(axis=1) | (yaw[0] != previous[1])
-            flags[0] |= first.astype(np.uint8)
         return [
             FRAMES_HEADER.pack(k, n),
             self.steps[:k].view(np.uint8).data,
-            pos.reshape(-1).view(np.uint8).data,
-            yaw.reshape(-1).view(np.uint8).data,
+            self.pos[:k].reshape(-1).view(np.uint8).data,
+            self.yaw[:k].reshape(-1).view(np.uint8).data,
             bytes(_pad(2 * k * n)),
-            flags.reshape(-1).data,
+            self.flags[:k].reshape(-1).data,
         ]
 
     def last_frame(self) -> tuple[np.ndarray, np.ndarray]:
@@ -212,8 +217,6 @@ class _RecordThread:
             queue.Queue()
         )
         self._error: BaseException | None = None
-        # (layout's buffer pool, (positions, yaws) of the last frame written in that layout)
-        self._last: tuple[Any, tuple[np.ndarray, np.ndarray]] | None = None
         self._thread = threading.Thread(target=self._run, name="fleet-async-trace", daemon=True)
         self._thread.start()
 
@@ -250,9 +253,7 @@ class _RecordThread:
             try:
                 if self._error is None:
                     if frames is not None:
-                        same = self._last is not None and self._last[0] is frames.pool
-                        parts = frames.payload(self._last[1] if same else None)  # type: ignore[index]  # same: not None
-                        self._last = (frames.pool, frames.last_frame())
+                        parts = frames.payload()
                     self._write(kind, parts or [])
                     if self._queue.empty():
                         self._file.flush()  # a live viewer reads the file as it grows
@@ -315,6 +316,7 @@ class TraceWriter:
         self._records: _RecordThread | None = None
         self._frames: _FrameBuffer | None = None
         self._frame_pool: queue.Queue[_FrameBuffer] | None = None
+        self._previous: tuple[np.ndarray, np.ndarray] | None = None  # last frame handed over
         self._layout_dirty = True
         self._new_bodies: list[Any] = []
         self._static_ids: set[int] = set()
@@ -501,10 +503,12 @@ class TraceWriter:
             data["reason"] = action.error_message
         self._events.append([t, self._step_stamp(), "action_ended", agent.object_id, data])
 
-    def _on_collision_started(self, obj_a: Any, obj_b: Any, **_: Any) -> None:
+    # The simulation bus's collision payload is (sim, obj_a, obj_b); naming it exactly keeps
+    # these two handlers, called hundreds of times a step, as cheap as a call can be.
+    def _on_collision_started(self, sim: Any, obj_a: Any, obj_b: Any) -> None:
         self._collided[1] += (obj_a, obj_b)
 
-    def _on_collision_ended(self, obj_a: Any, obj_b: Any, **_: Any) -> None:
+    def _on_collision_ended(self, sim: Any, obj_a: Any, obj_b: Any) -> None:
         self._collided[0] += (obj_a, obj_b)
 
     def _mark_collisions(self, step: int) -> None:
@@ -528,7 +532,7 @@ class TraceWriter:
             self._rebuild_layout()
         frames = self._frames
         assert frames is not None  # set by _rebuild_layout
-        frames.capture(step, self._sim.state, self._extra_flags(frames))
+        frames.capture(step, self._sim.state, self._extra_flags(frames), self._previous)
         self._last_step = step
         self._frame_count += 1
         if (
@@ -602,6 +606,7 @@ class TraceWriter:
         pool.put(_FrameBuffer(ids.astype(np.int32), rows, pool))
         self._frames = _FrameBuffer(ids.astype(np.int32), rows, pool)
         self._frame_pool = pool
+        self._previous = None
         self._flag_key = None
         payload = struct.pack("<I", len(ids)) + ids.astype("<i4").tobytes()
         self._write(RecordKind.LAYOUT, payload)
@@ -620,6 +625,7 @@ class TraceWriter:
         if frames is not None and frames.count:
             assert self._records is not None
             assert self._frame_pool is not None
+            self._previous = frames.last_frame()
             self._records.put(RecordKind.FRAMES, frames=frames)
             self._frames = self._frame_pool.get()  # waits only if the disk falls behind
         self._last_flush = self._clock()
