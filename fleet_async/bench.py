@@ -48,6 +48,7 @@ __all__ = [
     "python_heap_per_agent",
     "run",
     "run_from_args",
+    "set_goals",
     "spawn_fleet",
 ]
 
@@ -116,7 +117,7 @@ def python_heap_per_agent(n: int) -> float:
     return used / 1024.0 / n
 
 
-def _set_goals(agents: list[Agent], n: int) -> None:
+def set_goals(agents: list[Agent], n: int) -> None:
     """Give half the agents (chosen with :data:`SEED`) one goal each."""
     rng = np.random.default_rng(SEED)
     side = math.ceil(math.sqrt(n))
@@ -146,7 +147,7 @@ def run(n: int, profile: bool = False) -> dict[str, Any]:
         agents = spawn_fleet(sim, n)
         spawn_s = time.perf_counter() - t0
         rss_bytes = _rss_bytes() - rss0
-        _set_goals(agents, n)
+        set_goals(agents, n)
         for _ in range(WARMUP_STEPS):
             sim.step_once()
         phases: dict[str, float] = {}

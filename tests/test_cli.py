@@ -6,8 +6,10 @@ import io
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -18,6 +20,7 @@ from fleet_async.cli import main
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar, format_progress
 from fleet_async.cli.run import RunSummary, format_summary, load_scenario, run_steps, steps_for
+from fleet_async.viewer import TraceReader
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -101,14 +104,18 @@ def error_line(stderr: str) -> str:
 def test_help_names_every_subcommand(script):
     result = cli(script, "--help")
     assert result.returncode == 0, result.stderr
-    for command in ("run", "examples", "bench"):
+    for command in ("run", "examples", "view", "bench"):
         assert f"\n  {command} " in result.stdout
 
 
 @pytest.mark.parametrize(
     ("command", "options"),
     [
-        ("run", ["--duration", "--gui", "--rtf", "--record", "--record-size", "--quiet"]),
+        (
+            "run",
+            ["--duration", "--gui", "--rtf", "--record", "--record-size", "--quiet", "--trace"],
+        ),
+        ("view", ["--port", "--host", "--no-browser", "--follow"]),
         ("examples", ["--list", "--run", "--copy"]),
         ("bench", ["--n", "--large", "--json", "--profile"]),
     ],
@@ -442,3 +449,51 @@ def test_bench_json_matches_the_benchmark_script(script):
 def test_bench_rejects_a_non_positive_size(capsys):
     assert main(["bench", "--n", "0"]) == 2
     assert "fleet-async: error: --n: fleet sizes must be > 0, got 0" in capsys.readouterr().err
+
+
+# ----- traces and the viewer ------------------------------------------------------------------
+
+
+def test_run_trace_writes_a_trace_the_viewer_reads(script, scenario, tmp_path):
+    out = tmp_path / "runs" / "tiny.fatrace"
+    result = cli(script, "run", scenario, "--duration", "2", "--trace", out, "--trace-every", "2")
+    assert result.returncode == 0, result.stderr
+    assert summary_of(result.stdout)["trace"] == str(out)
+    reader = TraceReader(out)
+    assert [f.step for f in reader.frames()] == list(range(0, 21, 2))
+    assert sorted(b["name"] for b in reader.bodies.values()) == ["box", "r0", "r1"]
+
+
+def test_view_rejects_a_cut_trace_naming_file_problem_and_version(script, scenario, tmp_path):
+    out = tmp_path / "t.fatrace"
+    assert cli(script, "run", scenario, "--duration", "1", "--trace", out).returncode == 0
+    cut = tmp_path / "cut.fatrace"
+    cut.write_bytes(out.read_bytes()[:-20])
+    result = cli(script, "view", cut, "--no-browser")
+    assert result.returncode == 2
+    line = error_line(result.stderr)
+    assert str(cut) in line and "truncated" in line and "version 1" in line
+    result = cli(script, "view", tmp_path / "missing.fatrace", "--no-browser")
+    assert result.returncode == 2 and "no such trace file" in error_line(result.stderr)
+
+
+def test_view_serves_the_page_and_the_trace(script, scenario, tmp_path):
+    out = tmp_path / "t.fatrace"
+    assert cli(script, "run", scenario, "--duration", "1", "--trace", out).returncode == 0
+    base = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    with subprocess.Popen(
+        [script, "view", str(out), "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env=base,
+    ) as proc:
+        try:
+            assert proc.stdout is not None
+            line = proc.stdout.readline()  # printed once the server listens
+            url = line.split(" at ", 1)[1].split()[0]
+            with urllib.request.urlopen(url + "trace", timeout=30) as response:
+                assert response.read() == out.read_bytes()
+        finally:
+            proc.send_signal(signal.SIGINT)
+            assert proc.wait(timeout=30) == 0

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import fleet_async
 from fleet_async import bench
-from fleet_async.cli import examples, run
+from fleet_async.cli import examples, run, view
 from fleet_async.cli.errors import CliError
 
 __all__ = ["CliError", "build_parser", "main"]
@@ -28,6 +28,8 @@ subcommands:
   run       build a scenario from its YAML file and run it headless, then print a summary
             (robots, sim time, steps, real-time factor, actions, collisions)
   examples  list the bundled examples, run one, or copy them into a folder to edit
+  view      replay a trace (recorded with 'run --trace' or sim.start_trace) in the browser
+            viewer: top-down, play / pause / speed / scrub, click a robot for its events
   bench     run the fleet-scale benchmark: step time, real-time factor, spawn time and
             memory per agent for fleets of N robots
 
@@ -40,6 +42,8 @@ _RUN_EPILOG = """\
 examples:
   fleet-async run examples/scenarios/pick_drop.yaml --duration 40
   fleet-async run my_scenario.yaml --duration 60 --record out.gif --record-size 400x300
+  fleet-async run examples/scenarios/warehouse.yaml --trace warehouse.fatrace
+  fleet-async run examples/scenarios/warehouse.yaml --view     # watch it live
 
 The summary counts 'robots' (agents) and 'objects' (every other sim object), and
 'actions completed' / 'actions failed' (ACTION_COMPLETED / ACTION_FAILED events; cancelled
@@ -75,6 +79,19 @@ def _add_examples(subparsers: argparse._SubParsersAction[argparse.ArgumentParser
     )
     examples.add_arguments(parser)
     parser.set_defaults(handler=examples.execute)
+
+
+def _add_view(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = subparsers.add_parser(
+        "view",
+        help="replay a trace in the browser viewer",
+        description=(view.__doc__ or "").strip(),
+        epilog="examples:\n  fleet-async run examples/scenarios/warehouse.yaml --trace wh.fatrace\n"
+        "  fleet-async view wh.fatrace\n  fleet-async view wh.fatrace --port 0 --no-browser",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    view.add_arguments(parser)
+    parser.set_defaults(handler=view.execute)
 
 
 def _run_bench(args: argparse.Namespace) -> int:
@@ -113,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers.required = True
     _add_run(subparsers)
     _add_examples(subparsers)
+    _add_view(subparsers)
     _add_bench(subparsers)
     return parser
 

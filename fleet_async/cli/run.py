@@ -17,6 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from fleet_async.cli import live_view
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
 from fleet_async.core.base.config_utils import load_yaml_config
@@ -123,6 +124,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
     )
     parser.add_argument(
+        "--trace",
+        metavar="OUT.fatrace",
+        help="record a trace of the run (every body's pose per frame and the event log) for "
+        "'fleet-async view'; replaces a 'trace:' section of the scenario",
+    )
+    parser.add_argument(
+        "--trace-every",
+        type=_positive_int,
+        default=1,
+        metavar="N",
+        help="record a trace frame every N steps (default: 1, every step)",
+    )
+    parser.add_argument(
+        "--view",
+        action="store_true",
+        help="watch the run live in the browser viewer (traces to --trace, or to "
+        "SCENARIO.fatrace in the working directory); after the run the page stays served "
+        "until Ctrl+C",
+    )
+    parser.add_argument(
+        "--view-port",
+        type=int,
+        default=8765,
+        metavar="PORT",
+        help="port of the --view page (default 8765; 0: any free port)",
+    )
+    parser.add_argument(
         "--quiet",
         action="store_true",
         help="print nothing (no progress bar, no summary); errors still go to stderr",
@@ -132,7 +160,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 # ----- loading --------------------------------------------------------------------------------
 
 
-def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimulationCore:
+def load_scenario(
+    path: Path, gui_on: bool, rtf: float | None, *, drop_trace: bool = False
+) -> MultiRobotSimulationCore:
     """Build the simulation of the scenario file at ``path`` (as ``from_yaml`` does).
 
     Args:
@@ -140,11 +170,14 @@ def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimu
         gui_on: Value for ``gui``, replacing the scenario's.
         rtf: Value for ``target_rtf``; None keeps the scenario's with a GUI (0 if it sets
             none) and runs headless runs as fast as possible.
+        drop_trace: Ignore the scenario's ``trace:`` section (the command line traces).
 
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
     """
     config = load_yaml_config(path)
+    if drop_trace and isinstance(config, dict):
+        config.pop("trace", None)
     if any(key in SCENARIO_SECTIONS for key in config):
         if config.get("simulation") is None:
             config["simulation"] = {}
@@ -222,6 +255,7 @@ class RunSummary:
         actions_failed: ``ACTION_FAILED`` events (failed or cancelled actions).
         collisions: ``sim.collision_count`` at the end.
         recording: The saved recording, if any.
+        trace: The saved trace, if any.
         interrupted: Whether Ctrl+C stopped the run early.
     """
 
@@ -235,6 +269,7 @@ class RunSummary:
     collisions: int
     recording: str | None = None
     interrupted: bool = False
+    trace: str | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -258,6 +293,8 @@ def format_summary(summary: RunSummary) -> str:
     ]
     if summary.recording is not None:
         rows.append(("recording", summary.recording))
+    if summary.trace is not None:
+        rows.append(("trace", summary.trace))
     if summary.interrupted:
         rows.append(("interrupted", "yes (Ctrl+C)"))
     return "\n".join(f"{name + ':':<19}{value}" for name, value in rows)
@@ -270,7 +307,7 @@ def execute(args: argparse.Namespace) -> int:
     """Run the ``run`` command; return the exit code."""
     path = Path(args.scenario)
     try:
-        sim = load_scenario(path, args.gui, args.rtf)
+        sim = load_scenario(path, args.gui, args.rtf, drop_trace=bool(args.trace or args.view))
     except (ValueError, TypeError, OSError) as exc:
         raise CliError(str(exc)) from exc
     try:
@@ -299,11 +336,25 @@ def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) ->
         raise CliError(f"--record {args.record}: {exc}") from exc
 
 
+def _start_trace(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> None:
+    out = args.trace or f"{path.stem}.fatrace"
+    try:
+        # A live page polls the file: write buffered frames four times a wall second.
+        sim.start_trace(
+            out, every_n_steps=args.trace_every, flush_seconds=0.25 if args.view else 1.0
+        )
+    except (OSError, ValueError) as exc:
+        raise CliError(f"--trace {out}: {exc}") from exc
+
+
 def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
     duration = _duration(sim, path, args.duration)
     tally = ActionTally(sim)
     if args.record:
         _start_recording(sim, args)
+    if args.trace or args.view:
+        _start_trace(sim, path, args)
+    live = live_view.start(sim, args.view_port) if args.view else None
     if args.gui:
         sim.setup_monitor()
     bar = ProgressBar(duration, sys.stderr) if not args.quiet else None
@@ -327,9 +378,13 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     if bar is not None:
         bar.finish(sim.sim_time - sim_start)
     saved = sim.stop_recording() if args.record else None
+    trace = sim.stop_trace()
     if not args.quiet:
         steps = sim.step_count - start_step
-        print(format_summary(_summarize(sim, tally, steps, wall, saved, interrupted)))
+        summary = _summarize(sim, tally, steps, wall, saved, interrupted)
+        print(format_summary(dataclasses.replace(summary, trace=trace)))
+    if live is not None:
+        live_view.serve_until_interrupted(live, keep=not interrupted)
     return INTERRUPTED_EXIT_CODE if interrupted else 0
 
 

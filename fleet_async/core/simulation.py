@@ -16,12 +16,13 @@ from fleet_async.core.view.gui import GuiApi, handle_keyboard
 from fleet_async.core.view.monitor import MonitorApi
 from fleet_async.core.view.recording import RecordingApi
 from fleet_async.core.view.runner import run_loop
+from fleet_async.core.view.trace import TraceApi
 
 __all__ = ["MultiRobotSimulationCore"]
 
 
 class MultiRobotSimulationCore(
-    ScenarioApi, WorldLoadingApi, RecordingApi, MonitorApi, GuiApi, SimulationKernel
+    ScenarioApi, WorldLoadingApi, RecordingApi, TraceApi, MonitorApi, GuiApi, SimulationKernel
 ):
     """A multi-robot simulation on one PyBullet client.
 
@@ -49,7 +50,14 @@ class MultiRobotSimulationCore(
     def _gui_idle(self) -> None:
         handle_keyboard(self)
 
+    def reset(self, seed: int | None = None) -> None:
+        """Finish a running trace (its clock cannot go back), then reset the kernel."""
+        self.stop_trace()
+        super().reset(seed)
+
     def close(self) -> None:
-        """Disconnect from PyBullet; the simulation cannot step afterwards."""
+        """Finish a running trace, stop the monitor and disconnect from PyBullet; the
+        simulation cannot step afterwards."""
+        self.stop_trace()
         self._stop_monitor()
         super().close()

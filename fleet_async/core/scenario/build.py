@@ -11,6 +11,9 @@ nested layout is recognised by any of these sections, applied in this order:
 - ``world``: handed to ``sim.load_world(world, base_dir=...)``.
 - ``entities``: entity mappings, see :meth:`ScenarioApi.spawn_robots_from_config`.
 - ``plugins``: ``[{type: registered name | class: dotted.path, config: {...}, frequency: Hz}]``.
+- ``trace``: ``OUT.fatrace`` or ``{path: OUT.fatrace, every_n_steps: N | fps: F}``; the built
+  simulation records a trace from its first frame (``sim.start_trace``). ``path`` is relative
+  to the working directory, as the command line's output files are.
 
 Relative files (``urdf_path``, a shape's ``mesh_path``, world files) are looked up next to the
 scenario file first (``base_dir``). Every error names the section and key (``entities[2].grid``),
@@ -57,7 +60,15 @@ __all__ = [
     "register_sim_plugin",
 ]
 
-SCENARIO_SECTIONS = ("simulation", "world", "entities", "managers", "entity_classes", "plugins")
+SCENARIO_SECTIONS = (
+    "simulation",
+    "world",
+    "entities",
+    "managers",
+    "entity_classes",
+    "plugins",
+    "trace",
+)
 """Top-level sections of the nested layout."""
 
 SIM_PLUGIN_REGISTRY: dict[str, type[SimPlugin]] = {}
@@ -217,10 +228,25 @@ def _build(
         for label, cls, plugin_config, frequency in plugins:
             with config_context(where, label):
                 sim.register_plugin(cls, config=plugin_config, frequency=frequency)
+        if config.get("trace") is not None:
+            _start_trace(sim, config["trace"], where)
     except BaseException:
         sim.close()
         raise
     return sim
+
+
+_TRACE_KEYS = ("path", "every_n_steps", "fps")
+
+
+def _start_trace(sim: MultiRobotSimulationCore, entry: Any, where: str) -> None:
+    """The ``trace:`` section: a path, or ``{path, every_n_steps | fps}``."""
+    options = {"path": entry} if isinstance(entry, str) else entry
+    expect_type(options, dict, "a path or a mapping {path, every_n_steps | fps}", where, "trace")
+    reject_unknown_keys(list(options), _TRACE_KEYS, where, "trace")
+    expect_type(options.get("path"), str, "a file path (string)", where, "trace.path")
+    with config_context(where, "trace"):
+        sim.start_trace(**options)
 
 
 def _check_flat_keys(config: Mapping[str, Any], where: str) -> None:
