@@ -1,8 +1,9 @@
 """Reading a trace file back: header, records, frames as numpy arrays, the event log.
 
-The format is specified in ``docs/trace-format.md`` and written by
-``fleet_async.core.view.trace.TraceWriter``. The browser viewer has its own decoder in JavaScript
-(``static/trace.js``); this one serves Python users, the ``view`` command's checks and tests.
+The format is specified in ``docs/trace-format.md`` (its constants in
+``fleet_async.core.view.trace_format``) and written by ``fleet_async.core.view.trace``. The
+browser viewer has its own decoder in JavaScript (``static/trace.js``); this one serves Python
+users, the ``view`` command's checks and tests.
 """
 
 from __future__ import annotations
@@ -17,7 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from fleet_async.core.view.trace import FORMAT_VERSION, HEADER, MAGIC, RECORD, YAW_SCALE, RecordKind
+from fleet_async.core.view.trace_format import (
+    FORMAT_VERSION,
+    HEADER,
+    MAGIC,
+    RECORD,
+    YAW_SCALE,
+    RecordKind,
+)
 
 __all__ = ["Frame", "TraceFormatError", "TraceReader", "check_trace"]
 

@@ -19,7 +19,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from fleet_async.core.view.trace import HEADER, RECORD, RecordKind
+from fleet_async.core.view.trace_format import HEADER, RECORD, RecordKind
 
 __all__ = ["ViewerServer"]
 

@@ -19,7 +19,8 @@ from fleet_async import (
     ShapeParams,
     SimObject,
 )
-from fleet_async.core.view.trace import FORMAT_VERSION, HEADER, MAGIC, TraceWriter
+from fleet_async.core.view.trace import TraceWriter
+from fleet_async.core.view.trace_format import FORMAT_VERSION, HEADER, MAGIC
 from fleet_async.viewer import TraceFormatError, TraceReader
 from tests.conftest import headless_params
 
