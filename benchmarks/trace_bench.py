@@ -9,11 +9,10 @@ overhead of the medians, and the trace's size per robot per frame.
 
 Because a busy shared machine makes step-time differences of a few percent noisy, the cost is
 also attributed directly: the simulation thread's CPU time in the writer's post-step handler
-(copying the frame out, handing chunks to the writer thread), measured in the traced runs,
-plus the collision events per step times the CPU cost of one event (the bus dispatch and the
-writer's handler, best of 5 x 40,000 calls), as a share of the untraced step's CPU time. The
-writer thread (yaw conversion, file writes) runs on another core and is counted in the
-traced runs' CPU time.
+(copying the frame out, handing chunks to the writer thread) and in its collision listener
+(one call per check with the check's lists of pairs), measured in the traced runs, as a share
+of the untraced step's CPU time. The writer thread (file writes) runs on another core and is
+counted in the traced runs' CPU time.
 
 Run:  python benchmarks/trace_bench.py [--n 10000] [--repeat 5] [--every 1] [--json]
 """
@@ -23,7 +22,6 @@ from __future__ import annotations
 import argparse
 import gc
 import json
-import math
 import os
 import statistics
 import tempfile
@@ -31,7 +29,7 @@ import time
 from typing import Any
 
 from fleet_async.bench import TIMED_STEPS, WARMUP_STEPS, bench_params, set_goals, spawn_fleet
-from fleet_async.core import EventBus, MultiRobotSimulationCore, SimEvents
+from fleet_async.core import MultiRobotSimulationCore
 from fleet_async.core.view.trace import TraceWriter
 from fleet_async.viewer import TraceReader
 
@@ -47,23 +45,6 @@ def _timed(fn: Any, box: list[float]) -> Any:
     return wrapper
 
 
-def event_cost_us() -> float:
-    """Microseconds per collision event: the bus dispatch plus the writer's handler."""
-    with MultiRobotSimulationCore(bench_params()) as sim:
-        a, b = spawn_fleet(sim, 2)
-        writer = TraceWriter(sim, os.devnull)
-        bus = EventBus()
-        bus.on(SimEvents.COLLISION_STARTED, writer._log._on_collision_started)  # noqa: SLF001
-        calls, best = 40_000, math.inf
-        for _ in range(5):  # best of 5: the least disturbed by other processes
-            t0 = time.thread_time()
-            for _ in range(calls // 2):
-                bus.emit(SimEvents.COLLISION_STARTED, sim=sim, obj_a=a, obj_b=b)
-                bus.emit(SimEvents.COLLISION_STARTED, sim=sim, obj_a=b, obj_b=a)
-            best = min(best, (time.thread_time() - t0) * 1e6 / calls)
-        return best
-
-
 def one_run(n: int, trace_path: str | None, every: int) -> dict[str, float]:
     """Step time (ms, mean over the timed steps) of one run, traced when ``trace_path``."""
     gc.collect()
@@ -77,8 +58,11 @@ def one_run(n: int, trace_path: str | None, every: int) -> dict[str, float]:
         if trace_path is not None:
             t0 = time.perf_counter()
             writer = TraceWriter(sim, trace_path, every)
-            # Time the post-step handler (frame capture, chunk writes) of this run.
+            # Time the post-step handler (frame capture, chunk writes) and the collision
+            # listener of this run.
             writer._on_post_step = _timed(writer._on_post_step, in_handler)  # type: ignore[method-assign]  # noqa: SLF001
+            log = writer._log  # noqa: SLF001
+            log._on_collisions = _timed(log._on_collisions, in_handler)  # type: ignore[method-assign]  # noqa: SLF001
             writer.start()
             start_s = time.perf_counter() - t0
         t0, c0 = time.perf_counter(), time.process_time()
@@ -124,14 +108,10 @@ def main(argv: list[str] | None = None) -> int:
     med = {m: statistics.median(r["step_ms"] for r in runs[m]) for m in runs}
     best = {m: min(r["step_ms"] for r in runs[m]) for m in runs}
     cpu = {m: statistics.median(r["cpu_ms"] for r in runs[m]) for m in runs}
-    handler_ms = statistics.median(r["handler_ms"] for r in runs["on"])
-    per_event = event_cost_us()
-    attributed = handler_ms + per_step * per_event / 1000.0
+    attributed = statistics.median(r["handler_ms"] for r in runs["on"])
     result = {
         "n": args.n,
-        "handler_ms": handler_ms,
         "collision_events_per_step": per_step,
-        "event_cost_us": per_event,
         "attributed_ms": attributed,
         "attributed_pct_of_untraced_step": 100.0 * attributed / med["off"],
         "attributed_pct_of_untraced_cpu": 100.0 * attributed / cpu["off"],
@@ -167,8 +147,8 @@ def main(argv: list[str] | None = None) -> int:
         f"{result['best_overhead_pct']:+.1f}%; CPU time: {result['cpu_overhead_pct']:+.1f}%)"
     )
     print(
-        f"attributed: post-step handler {handler_ms:.3f} ms/step + {per_step:.0f} collision "
-        f"events/step x {per_event:.2f} us = {attributed:.3f} ms/step = "
+        f"attributed: post-step handler and collision listener {attributed:.3f} ms/step "
+        f"({per_step:.0f} collision events/step) = "
         f"{result['attributed_pct_of_untraced_cpu']:.1f}% of the untraced step's CPU time "
         f"({result['attributed_pct_of_untraced_step']:.1f}% of its wall time)"
     )

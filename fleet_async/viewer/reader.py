@@ -245,8 +245,9 @@ class TraceReader:
                 )
 
     def collisions(self) -> dict[str, np.ndarray]:
-        """Every collision start / end: ``step``, ``a``, ``b`` (object ids, -1 for one that
-        left the simulation) and ``started`` (1 started, 0 ended), in file order."""
+        """Every collision start / end: ``step``, ``a``, ``b`` (object ids, ``a < b``; a pair
+        whose body left the simulation ends under its id) and ``started`` (1 started, 0
+        ended), in file order."""
         parts = list(zip(*self._collisions, strict=True)) if self._collisions else [[]] * 4
         names = ("step", "a", "b", "started")
         dtypes = (np.int32, np.int32, np.int32, np.uint8)

@@ -166,6 +166,22 @@ def test_collisions_start_and_end(sim, tmp_path):
     assert hits["step"][0] < hits["step"][1]
 
 
+def test_a_collision_with_a_removed_body_ends_under_its_id(sim, tmp_path):
+    a, b = robot(sim, 0, 0, "a"), robot(sim, 0.5, 0, "b")
+    sim.step_once()
+    assert sim.get_active_collision_pairs() == [(a.object_id, b.object_id)]
+    sim.start_trace(tmp_path / "r.fatrace")  # the pair already touching starts in frame 0
+    sim.step_once()
+    b_id = b.object_id
+    sim.remove_object(b)
+    sim.step_once()
+    sim.stop_trace()
+    hits = TraceReader(tmp_path / "r.fatrace").collisions()
+    assert hits["step"].tolist() == [1, 3]
+    assert hits["started"].tolist() == [1, 0]
+    assert hits["a"].tolist() == [a.object_id] * 2 and hits["b"].tolist() == [b_id] * 2
+
+
 def test_trace_event_hook_and_spawns_mid_run(sim, tmp_path):
     robot(sim)
     sim.trace_event("ignored")  # no trace running: a no-op

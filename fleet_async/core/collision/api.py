@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from fleet_async.core.base.types import SpatialHashCellSizeMode, coerce_enum
 
 if TYPE_CHECKING:
-    from fleet_async.core.collision.system import CollisionSystem
+    from fleet_async.core.collision.system import CollisionListener, CollisionSystem
     from fleet_async.core.world.world import World
 
 __all__ = ["CollisionApi"]
@@ -75,6 +75,24 @@ class CollisionApi:
     def get_active_collision_pairs(self) -> list[tuple[int, int]]:
         """Pairs (object_id_i < object_id_j) in contact as of the last check."""
         return self._collision.active_pairs()
+
+    def add_collision_listener(self, listener: CollisionListener) -> None:
+        """Call ``listener(ended, started)`` after every check that changed the active pairs.
+
+        ``ended`` and ``started`` are lists of object-id pairs ``(a, b)`` with ``a < b``,
+        sorted; a pair whose object left the simulation ends at the next check. One call per
+        check however many pairs changed, so a recorder that wants every contact of a large
+        fleet pays per check rather than per ``collision_started`` / ``collision_ended``
+        event. Listeners run after the events, in the order they were added.
+        """
+        self._collision.listeners.append(listener)
+
+    def remove_collision_listener(self, listener: CollisionListener) -> bool:
+        """Stop calling ``listener``; return whether it was added."""
+        if listener in self._collision.listeners:
+            self._collision.listeners.remove(listener)
+            return True
+        return False
 
     def set_collision_check_frequency(self, frequency: float | None = None) -> None:
         """Check every step (None), never (0), or at ``frequency`` Hz of sim time."""

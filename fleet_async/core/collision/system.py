@@ -32,7 +32,10 @@ from fleet_async.core.world.state import COLLISION_CODES
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["CollisionSystem"]
+__all__ = ["CollisionListener", "CollisionSystem"]
+
+CollisionListener = Callable[[list[tuple[int, int]], list[tuple[int, int]]], None]
+"""Called as ``listener(ended, started)`` once per check that changed the active pairs."""
 
 _STATIC = COLLISION_CODES["static"]
 _DISABLED = COLLISION_CODES["disabled"]
@@ -88,6 +91,8 @@ class CollisionSystem:
         self._colors: dict[int, list[Any]] = {}
         self._next_due_step = 0
         self.registrations = 0
+        self.listeners: list[CollisionListener] = []
+        """Told the pairs (object ids, a < b, sorted) that ended and started, once per check."""
 
     # ----- schedule -----------------------------------------------------------------------
 
@@ -442,6 +447,9 @@ class CollisionSystem:
                 for me, other in ((obj_a, obj_b), (obj_b, obj_a)):
                     if me is not None and me.has_event_bus():
                         me.events.emit(event, sim=sim, obj_a=obj_a, obj_b=obj_b, other=other)
+        if started or ended:
+            for listener in tuple(self.listeners):
+                listener(ended, started)
         if started:
             sim.note_collisions(len(started))
         if self.color_change and (started or ended):

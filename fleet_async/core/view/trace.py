@@ -1,8 +1,8 @@
 """Run recording ("trace"): every body's pose per frame and the run's events, in one file.
 
 ``sim.start_trace("run.fatrace")`` hooks a :class:`TraceWriter` into the step loop through
-events (``post_step``, spawn / removal, action and collision events); it adds no branch to
-``step_once``. The browser viewer (``fleet-async view run.fatrace``) replays the file, and
+events (``post_step``, spawn / removal, action events) and a collision listener; it adds no
+branch to ``step_once``. The browser viewer (``fleet-async view run.fatrace``) replays the file, and
 ``fleet_async.viewer.TraceReader`` reads it back into numpy arrays.
 
 The format (``trace_format.py``, specified in ``docs/trace-format.md``) stores poses per frame
@@ -232,7 +232,6 @@ class TraceWriter:
     # ----- frames -----------------------------------------------------------------------
 
     def _on_post_step(self, step: int, **_: Any) -> None:
-        self._log.mark(step)
         if step % self._every == 0:
             self._capture(step)
 

@@ -1,7 +1,8 @@
 """The trace's event log: actions, collisions, removals and user events, stamped with steps.
 
-The log listens on the simulation's event bus while a trace runs, keeps what it hears in
-Python lists and hands it to the writer as EVENTS and COLLISIONS records when the writer
+The log listens on the simulation's event bus (actions) and to the collision system (one call
+per check with its lists of pairs that ended and started) while a trace runs, keeps what it
+hears in Python lists and hands it to the writer as EVENTS and COLLISIONS records when the writer
 flushes (before the FRAMES record that shows their step). It also keeps the set of bodies
 whose last action failed, for the frames' FLAG_FAILED bit.
 """
@@ -11,6 +12,7 @@ from __future__ import annotations
 import json
 import struct
 from collections.abc import Callable
+from itertools import chain
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -42,11 +44,9 @@ class TraceEventLog:
     def __init__(self, sim: MultiRobotSimulationCore) -> None:
         self._sim = sim
         self._events: list[list[Any]] = []
-        # Collision events arrive by the hundred per step at fleet scale, so their handlers
-        # only append the two objects; ids and steps are resolved in bulk when flushing.
-        self._collided: list[list[Any]] = [[], []]  # [ended objects, started objects] (pairs)
-        self._collision_marks: list[tuple[int, int, int]] = []  # (step, ended len, started len)
-        self._collision_rows: list[tuple[list[int], list[int], list[int]]] = []  # resolved
+        # Collisions arrive by the hundred per step at fleet scale: the collision system hands
+        # over each check's lists of pairs in one call, and they become arrays at flush time.
+        self._collisions: list[tuple[int, list[tuple[int, int]], list[tuple[int, int]]]] = []
         self._failed: set[int] = set()
         self.flag_version = 0
         """Bumped whenever the set of failed bodies changes (the writer caches flag masks)."""
@@ -54,8 +54,6 @@ class TraceEventLog:
             (SimEvents.ACTION_STARTED, self._on_action_started),
             (SimEvents.ACTION_COMPLETED, self._on_action_ended),
             (SimEvents.ACTION_FAILED, self._on_action_ended),
-            (SimEvents.COLLISION_STARTED, self._on_collision_started),
-            (SimEvents.COLLISION_ENDED, self._on_collision_ended),
         ]
 
     @property
@@ -66,15 +64,18 @@ class TraceEventLog:
     def hook(self) -> None:
         """Start listening; pairs already touching start, for the trace, in its first frame."""
         sim = self._sim
-        for a, b in sim.get_active_collision_pairs():
-            self._collided[1] += (sim.get_object_by_id(a), sim.get_object_by_id(b))
+        active = sim.get_active_collision_pairs()
+        if active:
+            self._collisions.append((sim.step_count, [], active))
         for event, handler in self._handlers:
             sim.events.on(event, handler)
+        sim.add_collision_listener(self._on_collisions)
 
     def unhook(self) -> None:
         """Stop listening."""
         for event, handler in self._handlers:
             self._sim.events.off(event, handler)
+        self._sim.remove_collision_listener(self._on_collisions)
 
     # ----- stamps -------------------------------------------------------------------------
 
@@ -93,9 +94,6 @@ class TraceEventLog:
 
     def note_removed(self, obj: Any) -> None:
         """``obj`` is leaving the simulation: log it and forget its failed state."""
-        # Pending collision events hold objects; resolve their ids while this one has its id.
-        self.mark(self.step_stamp())
-        self._resolve_collisions()
         if obj.object_id in self._failed:
             self._failed.discard(obj.object_id)
             self.flag_version += 1
@@ -122,66 +120,36 @@ class TraceEventLog:
 
     # ----- collisions -----------------------------------------------------------------------
 
-    # The simulation bus's collision payload is (sim, obj_a, obj_b); naming it exactly keeps
-    # these two handlers, called hundreds of times a step, as cheap as a call can be.
-    def _on_collision_started(self, sim: Any, obj_a: Any, obj_b: Any) -> None:
-        self._collided[1] += (obj_a, obj_b)
-
-    def _on_collision_ended(self, sim: Any, obj_a: Any, obj_b: Any) -> None:
-        self._collided[0] += (obj_a, obj_b)
-
-    def mark(self, step: int) -> None:
-        """Stamp the collision events since the last mark with ``step`` (the frame showing them)."""
-        ended, started = len(self._collided[0]), len(self._collided[1])
-        last = self._collision_marks[-1] if self._collision_marks else (0, 0, 0)
-        if (ended, started) != last[1:]:
-            self._collision_marks.append((step, ended, started))
-
-    def _resolve_collisions(self) -> None:
-        """Turn the pending collision events (objects) into (steps, ids, started) lists."""
-        if not self._collision_marks:
-            return
-        steps: list[int] = []
-        ids: list[int] = []
-        started: list[int] = []
-        begin = [0, 0]
-        for step, *ends in self._collision_marks:
-            for kind in (0, 1):  # ended before started, as the collision system emits them
-                objs = self._collided[kind][begin[kind] : ends[kind]]
-                ids += [-1 if o is None else o.object_id for o in objs]
-                count = len(objs) // 2
-                steps += [step] * count
-                started += [kind] * count
-                begin[kind] = ends[kind]
-        self._collided = [self._collided[0][begin[0] :], self._collided[1][begin[1] :]]
-        self._collision_marks = []
-        self._collision_rows.append((steps, ids, started))
+    def _on_collisions(self, ended: list[tuple[int, int]], started: list[tuple[int, int]]) -> None:
+        self._collisions.append((self.step_stamp(), ended, started))
 
     # ----- records ------------------------------------------------------------------------
 
     def drain(self) -> list[Record]:
         """The EVENTS and COLLISIONS records of everything logged since the last drain."""
-        self.mark(self._sim.step_count)
         records: list[Record] = []
         if self._events:
             records.append((RecordKind.EVENTS, [json_bytes({"events": self._events})]))
             self._events = []
-        self._resolve_collisions()
-        if self._collision_rows:
+        if self._collisions:
             records.append((RecordKind.COLLISIONS, self._collision_parts()))
+            self._collisions = []
         return records
 
     def _collision_parts(self) -> list[Any]:
-        """A COLLISIONS payload: pairs that started or ended, with the step of each."""
-        steps = [v for rows in self._collision_rows for v in rows[0]]
-        ids = [v for rows in self._collision_rows for v in rows[1]]
-        started = [v for rows in self._collision_rows for v in rows[2]]
-        self._collision_rows = []
-        pairs = np.asarray(ids, dtype=np.int32).reshape(-1, 2)
+        """A COLLISIONS payload: pairs that ended or started (in that order per check), with
+        the step of the frame that shows each."""
+        lists = [pairs for _, ended, started in self._collisions for pairs in (ended, started)]
+        counts = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))
+        total = int(counts.sum())
+        stamps = np.fromiter((s for s, _, _ in self._collisions), dtype=np.int32)
+        ids = np.fromiter(
+            chain.from_iterable(chain.from_iterable(lists)), dtype=np.int32, count=2 * total
+        ).reshape(-1, 2)
         return [
-            struct.pack("<I", len(steps)),
-            np.asarray(steps, dtype=np.int32).tobytes(),
-            np.ascontiguousarray(pairs[:, 0]).tobytes(),
-            np.ascontiguousarray(pairs[:, 1]).tobytes(),
-            np.asarray(started, dtype=np.uint8).tobytes(),
+            struct.pack("<I", total),
+            np.repeat(np.repeat(stamps, 2), counts).tobytes(),
+            np.ascontiguousarray(ids[:, 0]).tobytes(),
+            np.ascontiguousarray(ids[:, 1]).tobytes(),
+            np.repeat(np.tile(np.array([0, 1], dtype=np.uint8), len(stamps)), counts).tobytes(),
         ]

@@ -271,9 +271,7 @@ class TraceDecoder {
         for (const id of [c.a, c.b]) this.contacts.set(id, (this.contacts.get(id) || 0) + 1);
       } else {
         const pair = this.activePairs.get(key);
-        if (!pair) {  // one side left the simulation (-1): end whichever pair it was in
-          continue;
-        }
+        if (!pair) continue;  // an end without its start (the trace began after it)
         this.activePairs.delete(key);
         for (const id of pair) {
           const left = (this.contacts.get(id) || 1) - 1;
