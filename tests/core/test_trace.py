@@ -20,7 +20,8 @@ from fleet_async import (
     SimObject,
 )
 from fleet_async.core.view.trace import TraceWriter
-from fleet_async.core.view.trace_format import FORMAT_VERSION, HEADER, MAGIC
+from fleet_async.core.view.trace_format import FORMAT_VERSION, HEADER, MAGIC, YAW_SCALE
+from fleet_async.core.view.trace_frames import HeadingTracker
 from fleet_async.viewer import TraceFormatError, TraceReader
 from tests.conftest import headless_params
 
@@ -73,6 +74,28 @@ def test_frames_hold_every_body_pose_per_step(sim, tmp_path):
     assert frames[-1].yaw[1] == pytest.approx(math.pi / 2, abs=1e-4)
     assert frames[-1].flags[0] & 1 and not frames[-1].flags[1] & 1  # a moves, b stands
     assert reader.meta["timestep"] == 0.1 and reader.version == FORMAT_VERSION
+
+
+@pytest.mark.parametrize("turned", [0, 3, 40])
+def test_headings_recomputed_only_where_they_changed_match_a_full_computation(turned):
+    rng = np.random.default_rng(turned)
+
+    def random_quats(n):
+        q = rng.normal(size=(n, 4))
+        return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+    def full(q):
+        x, y, z, w = q.T
+        yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return np.rint(yaw / YAW_SCALE)
+
+    quats = random_quats(100)
+    tracker, out = HeadingTracker(100), np.empty(100, dtype=np.int16)
+    for _ in range(3):
+        tracker.update(quats, out)
+        gap = np.abs(out - full(quats))
+        assert np.minimum(gap, 65534 - gap).max() <= 1  # float32 rounding; +-pi wrap
+        quats[:turned] = random_quats(turned)
 
 
 def test_bodies_carry_kind_shape_colour_and_static_pose(sim, tmp_path):

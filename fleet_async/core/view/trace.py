@@ -39,7 +39,7 @@ from fleet_async.core.view.trace_format import (
     YAW_SCALE,
     RecordKind,
 )
-from fleet_async.core.view.trace_frames import FrameBuffer
+from fleet_async.core.view.trace_frames import FrameBuffer, HeadingTracker
 from fleet_async.core.world.state import COLLISION_CODES
 
 if TYPE_CHECKING:
@@ -311,8 +311,9 @@ class TraceWriter:
             rows, ids = rows[keep], ids[keep]
         # Two buffers per layout: one fills while the record thread writes the other.
         pool: queue.Queue[FrameBuffer] = queue.Queue()
-        pool.put(FrameBuffer(ids.astype(np.int32), rows, pool))
-        self._frames = FrameBuffer(ids.astype(np.int32), rows, pool)
+        headings = HeadingTracker(len(ids))
+        pool.put(FrameBuffer(ids.astype(np.int32), rows, pool, headings))
+        self._frames = FrameBuffer(ids.astype(np.int32), rows, pool, headings)
         self._frame_pool = pool
         self._previous = None
         self._flag_key = None

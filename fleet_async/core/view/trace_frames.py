@@ -19,10 +19,70 @@ from fleet_async.core.view.trace_format import (
     padding,
 )
 
-__all__ = ["FrameBuffer"]
+__all__ = ["FrameBuffer", "HeadingTracker"]
 
 _CHUNK_BYTES = 4 << 20  # frame bytes buffered before a FRAMES record is written
 _MAX_CHUNK_FRAMES = 256
+
+
+def yaw_units(quat: np.ndarray, scratch: np.ndarray, out: np.ndarray) -> None:
+    """``out`` = the int16 yaw (units of YAW_SCALE) of (M, 4) float32 quaternions.
+
+    float32 is ample for a 0.0055-degree resolution and makes ``arctan2`` three times cheaper
+    than in float64. ``scratch`` is a (3, >= M) float32 work array.
+    """
+    m = len(quat)
+    x, y, z, w = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
+    a, b, c = scratch[0, :m], scratch[1, :m], scratch[2, :m]
+    # yaw = atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)) = atan2(w z + x y, 1/2 - (y^2 + z^2))
+    np.multiply(w, z, out=a)
+    np.multiply(x, y, out=c)
+    a += c
+    np.multiply(y, y, out=b)
+    np.multiply(z, z, out=c)
+    b += c
+    np.subtract(np.float32(0.5), b, out=b)
+    np.arctan2(a, b, out=a)
+    a *= np.float32(1.0 / YAW_SCALE)
+    np.rint(a, out=a)
+    out[...] = a
+
+
+class HeadingTracker:
+    """The int16 yaws of one layout's bodies, recomputed only where the orientation changed.
+
+    Most bodies of a fleet keep their heading from one step to the next (driving straight,
+    waiting, parked), so each frame compares the float32 quaternions with the frame before's
+    (two 64-bit words per body) and runs the trigonometry only on the rows that differ, or on
+    all of them when more than a quarter do (gathering rows costs more than it saves then).
+    """
+
+    def __init__(self, n: int) -> None:
+        self._quats = np.empty((2, n, 4), dtype=np.float32)
+        self._current = 0
+        self._valid = False
+        self._yaw = np.zeros(n, dtype=np.int16)
+        self._scratch = np.empty((3, n), dtype=np.float32)
+
+    def update(self, orientation: np.ndarray, out: np.ndarray) -> None:
+        """``out`` = the yaws of (N, 4) float64 ``orientation`` rows (the state store's)."""
+        n = len(self._yaw)
+        quat = self._quats[self._current]
+        quat[...] = orientation
+        if not self._valid:
+            yaw_units(quat, self._scratch, self._yaw)
+        else:
+            ne = quat.view(np.uint64) != self._quats[self._current ^ 1].view(np.uint64)
+            changed = np.flatnonzero(ne[:, 0] | ne[:, 1])
+            if 4 * len(changed) > n:
+                yaw_units(quat, self._scratch, self._yaw)
+            elif len(changed):
+                part = np.empty(len(changed), dtype=np.int16)
+                yaw_units(quat[changed], self._scratch, part)
+                self._yaw[changed] = part
+        out[...] = self._yaw
+        self._current ^= 1
+        self._valid = True
 
 
 class FrameBuffer:
@@ -32,10 +92,17 @@ class FrameBuffer:
     while the step loop fills the other buffer of the layout's pool.
     """
 
-    def __init__(self, ids: np.ndarray, rows: np.ndarray, pool: queue.Queue[FrameBuffer]) -> None:
+    def __init__(
+        self,
+        ids: np.ndarray,
+        rows: np.ndarray,
+        pool: queue.Queue[FrameBuffer],
+        headings: HeadingTracker,
+    ) -> None:
         n = len(ids)
         self.ids = ids
         self.pool = pool
+        self._headings = headings  # shared by the buffers of one layout
         # Contiguous rows (the usual case) are read by slicing, which is cheaper than gathering.
         contiguous = n > 0 and int(rows[-1]) - int(rows[0]) == n - 1
         self.sel: slice | np.ndarray = (
@@ -49,7 +116,7 @@ class FrameBuffer:
         self.yaw = np.zeros((self.capacity, n), dtype=np.int16)
         self.flags = np.zeros((self.capacity, n), dtype=np.uint8)
         self.count = 0
-        self._scratch = np.empty((2, n))
+        self._ne = np.empty((n, 3), dtype=bool)
         # object id -> index in the frame (-1: not in it), for setting flag bits in bulk
         self.lookup = np.full(int(ids.max()) + 1 if n else 0, -1, dtype=np.int64)
         self.lookup[ids] = np.arange(n)
@@ -80,22 +147,8 @@ class FrameBuffer:
         self.steps[k] = step
         pos = self.pos[k]
         pos[...] = store.position[sel]
-        quat = store.orientation[sel]
-        a, b = self._scratch
-        x, y, z, w = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
-        # yaw = atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)), in preallocated arrays
-        np.multiply(w, z, out=a)
-        a += x * y
-        a *= 2.0
-        np.multiply(y, y, out=b)
-        b += z * z
-        b *= -2.0
-        b += 1.0
-        np.arctan2(a, b, out=a)
-        a *= 1.0 / YAW_SCALE
-        np.rint(a, out=a)
         yaw = self.yaw[k]
-        yaw[...] = a
+        self._headings.update(store.orientation[sel], yaw)
         flags = self.flags[k]
         before = (self.pos[k - 1], self.yaw[k - 1]) if k else previous
         if before is None:
@@ -103,7 +156,12 @@ class FrameBuffer:
         else:
             moved = flags.view(bool)
             np.not_equal(yaw, before[1], out=moved)  # FLAG_MOVING is bit 0
-            moved |= (pos != before[0]).any(axis=1)
+            # Column by column: ndarray.any(axis=1) on (N, 3) is several times slower.
+            ne = self._ne
+            np.not_equal(pos, before[0], out=ne)
+            moved |= ne[:, 0]
+            moved |= ne[:, 1]
+            moved |= ne[:, 2]
         if extra_flags is not None:
             flags |= extra_flags
         self.count += 1
