@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -113,7 +114,16 @@ def test_help_names_every_subcommand(script):
     [
         (
             "run",
-            ["--duration", "--gui", "--rtf", "--record", "--record-size", "--quiet", "--trace"],
+            [
+                "--duration",
+                "--gui",
+                "--rtf",
+                "--record",
+                "--record-size",
+                "--camera",
+                "--quiet",
+                "--trace",
+            ],
         ),
         ("view", ["--port", "--host", "--no-browser", "--follow"]),
         ("examples", ["--list", "--run", "--copy"]),
@@ -191,6 +201,27 @@ def test_run_records_a_gif(script, scenario, tmp_path):
     with Image.open(out) as image:
         assert (image.format, image.size) == ("GIF", (64, 48))
         assert image.n_frames >= 2
+
+
+def test_run_camera_follows_a_robot_in_the_recording(script, scenario, tmp_path):
+    out = tmp_path / "follow.gif"
+    args = ["--duration", "1", "--record", out, "--record-size", "64x48", "--quiet"]
+    result = cli(script, "run", scenario, *args, "--camera", "follow:r1")
+    assert result.returncode == 0, result.stderr
+    assert out.exists()
+
+
+@pytest.mark.parametrize(
+    ("mode", "message"),
+    [
+        ("fisheye", r"--camera: .*got 'fisheye'"),
+        ("follow:nobody", r"--camera follow:nobody: .*no body called 'nobody'.*r0"),
+    ],
+)
+def test_run_bad_camera_names_the_option_and_value(script, scenario, mode, message):
+    result = cli(script, "run", scenario, "--duration", "1", "--camera", mode)
+    assert result.returncode == 2
+    assert re.search(message, result.stderr), result.stderr
 
 
 def test_run_record_without_pillow_explains_what_to_install(script, scenario, tmp_path):

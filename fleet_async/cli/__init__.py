@@ -42,6 +42,7 @@ _RUN_EPILOG = """\
 examples:
   fleet-async run examples/scenarios/pick_drop.yaml --duration 40
   fleet-async run my_scenario.yaml --duration 60 --record out.gif --record-size 400x300
+  fleet-async run examples/scenarios/pick_drop.yaml --record out.gif --camera follow:robot0
   fleet-async run examples/scenarios/warehouse.yaml --trace warehouse.fatrace
   fleet-async run examples/scenarios/warehouse.yaml --view     # watch it live
 

@@ -23,6 +23,7 @@ from fleet_async.cli.progress import ProgressBar
 from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
+from fleet_async.core.sim.camera_config import parse_camera_mode
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
@@ -80,6 +81,14 @@ def _positive_int(text: str) -> int:
     return int(text)
 
 
+def _camera_mode(text: str) -> str:
+    try:
+        parse_camera_mode(text, "--camera")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--camera: ")) from None
+    return text
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the ``run`` options to ``parser``."""
     parser.add_argument("scenario", metavar="SCENARIO.yaml", help="the scenario file to run")
@@ -122,6 +131,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=15,
         metavar="N",
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
+    )
+    parser.add_argument(
+        "--camera",
+        type=_camera_mode,
+        metavar="MODE",
+        help="what the GUI window and --record look at (replaces the scenario's "
+        "camera_config.camera_mode): auto (the whole scene, widening when a robot drives out "
+        "of view; the default), top_down, orbit, fleet (follows the robots), follow:NAME "
+        "(follows the body called NAME) or manual (camera_config's camera_distance / yaw / "
+        "pitch / target)",
     )
     parser.add_argument(
         "--trace",
@@ -328,6 +347,15 @@ def _duration(sim: MultiRobotSimulationCore, path: Path, requested: float | None
     return duration
 
 
+def _set_camera(sim: MultiRobotSimulationCore, mode: str) -> None:
+    """``--camera MODE``: the scenario's camera_config with ``camera_mode`` replaced."""
+    sim.params.camera_config = {**(sim.params.camera_config or {}), "camera_mode": mode}
+    try:
+        sim.setup_camera()  # frames the GUI window; finds a follow:NAME body or says not
+    except ValueError as exc:
+        raise CliError(f"--camera {mode}: {exc}") from exc
+
+
 def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> None:
     width, height = args.record_size
     try:
@@ -350,6 +378,8 @@ def _start_trace(sim: MultiRobotSimulationCore, path: Path, args: argparse.Names
 def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
     duration = _duration(sim, path, args.duration)
     tally = ActionTally(sim)
+    if args.camera:
+        _set_camera(sim, args.camera)
     if args.record:
         _start_recording(sim, args)
     if args.trace or args.view:

@@ -9,9 +9,12 @@ the monitor and GUI input.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
+from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.view.gui import GuiApi, handle_keyboard
 from fleet_async.core.view.monitor import MonitorApi
 from fleet_async.core.view.recording import RecordingApi
@@ -32,6 +35,12 @@ class MultiRobotSimulationCore(
             ``enable_collision_color_change`` is on.
     """
 
+    def __init__(
+        self, params: SimulationParams | None = None, collision_color: Sequence[float] | None = None
+    ) -> None:
+        super().__init__(params, collision_color)
+        self._start_gui_camera()
+
     def run_simulation(self, duration: float | None = None) -> None:
         """Step for ``duration`` sim seconds (``params.duration`` if None; <= 0 runs until Ctrl+C).
 
@@ -40,6 +49,7 @@ class MultiRobotSimulationCore(
         if not self._initialized:
             self.initialize_simulation()
         run_for = self._params.duration if duration is None else duration
+        self._frame_gui_camera()
         self.setup_monitor()
         try:
             run_loop(self, float(run_for), idle=self._gui_idle if self.is_gui else None)
@@ -51,9 +61,11 @@ class MultiRobotSimulationCore(
         handle_keyboard(self)
 
     def reset(self, seed: int | None = None) -> None:
-        """Finish a running trace (its clock cannot go back), then reset the kernel."""
+        """Finish a running trace (its clock cannot go back), then reset the kernel; the GUI
+        camera frames the new scene at the next step."""
         self.stop_trace()
         super().reset(seed)
+        self._frame_gui_camera(restart=True)
 
     def close(self) -> None:
         """Finish a running trace, stop the monitor and disconnect from PyBullet; the

@@ -9,7 +9,10 @@ the system itself (``system.py``).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from fleet_async.core.base.types import SpatialHashCellSizeMode, coerce_enum
 
@@ -40,6 +43,27 @@ class CollisionApi:
     def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
         """``{object_id: (aabb_min, aabb_max)}`` of every object taking part in collisions."""
         return self._collision.get_aabbs()
+
+    def get_aabb_bounds(
+        self, object_ids: Sequence[int] | None = None
+    ) -> tuple[list[float], list[float]] | None:
+        """(min, max) corners (m, world frame) of the union of the objects' AABBs.
+
+        Args:
+            object_ids: The objects (default: every object taking part in collisions). Ids of
+                objects without an AABB (collision mode DISABLED, removed) are skipped.
+
+        Returns:
+            The two corners, or None when no object given has an AABB.
+        """
+        rows = None
+        if object_ids is not None:
+            objects = (self._world.get(i) for i in object_ids)
+            rows = np.fromiter(
+                (obj.state_row for obj in objects if obj is not None), dtype=np.int64
+            )
+        bounds = self._collision.bounds(rows)
+        return None if bounds is None else (bounds[0].tolist(), bounds[1].tolist())
 
     def filter_aabb_pairs(
         self,

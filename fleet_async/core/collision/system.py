@@ -257,6 +257,15 @@ class CollisionSystem:
         self._refresh(moved)
         return np.flatnonzero(live & (store.collision_mode[:high] != _DISABLED))
 
+    def bounds(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """(min, max) corners of the union of the AABBs of ``rows`` (default: all taking part)
+        that have one; None when none has."""
+        taking = self._prepare()
+        rows = taking if rows is None else rows[np.isin(rows, taking)]
+        if not len(rows):
+            return None
+        return self._aabb_min[rows].min(axis=0), self._aabb_max[rows].max(axis=0)
+
     def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
         """``{object_id: (aabb_min, aabb_max)}`` for every object that takes part."""
         rows = self._prepare()

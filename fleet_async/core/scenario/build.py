@@ -228,6 +228,9 @@ def _build(
         for label, cls, plugin_config, frequency in plugins:
             with config_context(where, label):
                 sim.register_plugin(cls, config=plugin_config, frequency=frequency)
+        # Frames the GUI window on the scene now, and finds a follow:NAME body or says not.
+        with config_context(where, "simulation.camera_config"):
+            sim.setup_camera()
         if config.get("trace") is not None:
             _start_trace(sim, config["trace"], where)
     except BaseException:
