@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 import pybullet as p
 
 from fleet_async import Agent, Pose
+
+REPO = Path(__file__).resolve().parents[2]
 
 TWO_COLOURS = """<?xml version="1.0"?>
 <robot name="two_colours">
@@ -43,6 +46,17 @@ def test_a_link_of_several_colours_takes_its_largest_visuals_colour(sim, tmp_pat
     warnings = [r.getMessage() for r in caplog.records if "several colours" in r.getMessage()]
     assert len(warnings) == 1  # once per file
     assert str(urdf) in warnings[0] and "'chassis'" in warnings[0]
+
+
+def test_sdf_scenery_takes_the_colour_covering_most_of_it(sim, caplog):
+    world = "examples/worlds/warehouse.world"
+    with caplog.at_level(logging.INFO, logger="fleet_async"):
+        sim.load_world({"world_file": str(REPO / world)})
+    racks = [o for o in sim.sim_objects if "shelf" in o.name]
+    assert racks
+    for rack in racks:  # blue frame, three brown boards: brown covers most of it
+        assert set(colours(sim, rack.body_id)) == {(0.8, 0.6, 0.35, 1.0)}
+    assert any("several colours" in r.getMessage() for r in caplog.records)
 
 
 def test_bundled_robots_need_no_repainting(sim, caplog):
