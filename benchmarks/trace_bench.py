@@ -1,11 +1,12 @@
 """What a trace costs: step time with and without ``sim.start_trace``, side by side.
 
 The workload is ``fleet_async.bench``'s (N box robots on a grid, half of them driving to a
-random goal, collision checks every step; 10 warm-up steps, then 100 timed steps). Each repeat
+random goal, collision checks every step; 10 warm-up steps, then 300 timed steps). Each repeat
 runs the workload twice on fresh simulations, once untraced and once traced (a frame every
 step), in alternating order (A/B interleaved), so a slow patch of a shared machine hits both
 modes. Reported: the median and best step time of each mode (wall and process CPU time), the
-overhead of the medians, and the trace's size per robot per frame.
+overhead of the medians and the median of the pairs' ratios, and the trace's size per robot
+per frame.
 
 Because a busy shared machine makes step-time differences of a few percent noisy, the cost is
 also attributed directly: the simulation thread's CPU time in the writer's post-step handler
@@ -14,7 +15,7 @@ also attributed directly: the simulation thread's CPU time in the writer's post-
 of the untraced step's CPU time. The writer thread (file writes) runs on another core and is
 counted in the traced runs' CPU time.
 
-Run:  python benchmarks/trace_bench.py [--n 10000] [--repeat 5] [--every 1] [--json]
+Run:  python benchmarks/trace_bench.py [--n 10000] [--repeat 5] [--every 1] [--steps 300] [--json]
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import tempfile
 import time
 from typing import Any
 
-from fleet_async.bench import TIMED_STEPS, WARMUP_STEPS, bench_params, set_goals, spawn_fleet
+from fleet_async.bench import WARMUP_STEPS, bench_params, set_goals, spawn_fleet
 from fleet_async.core import MultiRobotSimulationCore
 from fleet_async.core.view.trace import TraceWriter
 from fleet_async.viewer import TraceReader
@@ -45,7 +46,7 @@ def _timed(fn: Any, box: list[float]) -> Any:
     return wrapper
 
 
-def one_run(n: int, trace_path: str | None, every: int) -> dict[str, float]:
+def one_run(n: int, trace_path: str | None, every: int, steps: int) -> dict[str, float]:
     """Step time (ms, mean over the timed steps) of one run, traced when ``trace_path``."""
     gc.collect()
     with MultiRobotSimulationCore(bench_params()) as sim:
@@ -66,7 +67,7 @@ def one_run(n: int, trace_path: str | None, every: int) -> dict[str, float]:
             writer.start()
             start_s = time.perf_counter() - t0
         t0, c0 = time.perf_counter(), time.process_time()
-        for _ in range(TIMED_STEPS):
+        for _ in range(steps):
             sim.step_once()
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         t0 = time.perf_counter()
@@ -74,9 +75,9 @@ def one_run(n: int, trace_path: str | None, every: int) -> dict[str, float]:
             writer.stop()
         stop_s = time.perf_counter() - t0
     return {
-        "handler_ms": in_handler[0] * 1000.0 / TIMED_STEPS,
-        "step_ms": wall * 1000.0 / TIMED_STEPS,
-        "cpu_ms": cpu * 1000.0 / TIMED_STEPS,
+        "handler_ms": in_handler[0] * 1000.0 / steps,
+        "step_ms": wall * 1000.0 / steps,
+        "cpu_ms": cpu * 1000.0 / steps,
         "start_s": start_s,
         "stop_s": stop_s,
     }
@@ -87,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, default=10000, help="robots (default 10000)")
     parser.add_argument("--repeat", type=int, default=5, help="A/B pairs (default 5)")
     parser.add_argument("--every", type=int, default=1, help="trace every_n_steps (default 1)")
+    parser.add_argument("--steps", type=int, default=300, help="timed steps per run (default 300)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     runs: dict[str, list[dict[str, float]]] = {"off": [], "on": []}
@@ -95,7 +97,8 @@ def main(argv: list[str] | None = None) -> int:
         for i in range(args.repeat):
             order = ("off", "on") if i % 2 == 0 else ("on", "off")
             for mode in order:
-                runs[mode].append(one_run(args.n, path if mode == "on" else None, args.every))
+                trace = path if mode == "on" else None
+                runs[mode].append(one_run(args.n, trace, args.every, args.steps))
         size = os.path.getsize(path)
         reader = TraceReader(path)
         frames = reader.frame_count
@@ -103,9 +106,12 @@ def main(argv: list[str] | None = None) -> int:
         # Collision events per timed step, from the last traced run's file (not counted during
         # the timed steps: a counting handler would cost about as much as the writer's).
         stamped = reader.collisions()["step"]
-        timed = (stamped > WARMUP_STEPS) & (stamped <= WARMUP_STEPS + TIMED_STEPS)
-        per_step = float(timed.sum()) / TIMED_STEPS
+        timed = (stamped > WARMUP_STEPS) & (stamped <= WARMUP_STEPS + args.steps)
+        per_step = float(timed.sum()) / args.steps
     med = {m: statistics.median(r["step_ms"] for r in runs[m]) for m in runs}
+    # Each pair ran back to back, so its ratio is the least disturbed by a drifting machine.
+    pairs = zip(runs["on"], runs["off"], strict=True)
+    paired = [on["step_ms"] / off["step_ms"] for on, off in pairs]
     best = {m: min(r["step_ms"] for r in runs[m]) for m in runs}
     cpu = {m: statistics.median(r["cpu_ms"] for r in runs[m]) for m in runs}
     attributed = statistics.median(r["handler_ms"] for r in runs["on"])
@@ -122,6 +128,7 @@ def main(argv: list[str] | None = None) -> int:
         "median_off": med["off"],
         "median_on": med["on"],
         "overhead_pct": 100.0 * (med["on"] - med["off"]) / med["off"],
+        "paired_overhead_pct": 100.0 * (statistics.median(paired) - 1.0),
         "best_overhead_pct": 100.0 * (best["on"] - best["off"]) / best["off"],
         "cpu_overhead_pct": 100.0 * (cpu["on"] - cpu["off"]) / cpu["off"],
         "start_s": statistics.median(r["start_s"] for r in runs["on"]),
@@ -135,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(result))
         return 0
     print(
-        f"N = {args.n}, {args.repeat} A/B pairs, {TIMED_STEPS} timed steps each, a frame "
+        f"N = {args.n}, {args.repeat} A/B pairs, {args.steps} timed steps each, a frame "
         f"every {args.every} step(s)"
     )
     print(f"{'run':>4} {'untraced ms':>12} {'traced ms':>10}")
@@ -143,7 +150,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{i + 1:>4} {off:>12.3f} {on:>10.3f}")
     print(
         f"median: untraced {med['off']:.3f} ms, traced {med['on']:.3f} ms, "
-        f"overhead {result['overhead_pct']:+.1f}% (best of each: "
+        f"overhead {result['overhead_pct']:+.1f}% (median of the pairs' ratios: "
+        f"{result['paired_overhead_pct']:+.1f}%; best of each: "
         f"{result['best_overhead_pct']:+.1f}%; CPU time: {result['cpu_overhead_pct']:+.1f}%)"
     )
     print(
