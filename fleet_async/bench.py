@@ -54,6 +54,7 @@ __all__ = [
     "run",
     "run_from_args",
     "run_repeated",
+    "set_goals",
     "spawn_fleet",
 ]
 
@@ -122,7 +123,7 @@ def python_heap_per_agent(n: int) -> float:
     return used / 1024.0 / n
 
 
-def _set_goals(agents: list[Agent], n: int) -> None:
+def set_goals(agents: list[Agent], n: int) -> None:
     """Give half the agents (chosen with :data:`SEED`) one goal each."""
     rng = np.random.default_rng(SEED)
     side = math.ceil(math.sqrt(n))
@@ -156,7 +157,7 @@ def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True)
         agents = spawn_fleet(sim, n)
         spawn_s = time.perf_counter() - t0
         rss_bytes = _rss_bytes() - rss0
-        _set_goals(agents, n)
+        set_goals(agents, n)
         for _ in range(WARMUP_STEPS):
             sim.step_once()
         gc.collect()

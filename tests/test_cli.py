@@ -6,9 +6,12 @@ import dataclasses
 import io
 import json
 import os
+import re
 import shutil
+import signal
 import subprocess
 import sys
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -20,6 +23,7 @@ from fleet_async.cli import main
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar, format_progress
 from fleet_async.cli.run import RunSummary, format_summary, load_scenario, run_steps, steps_for
+from fleet_async.viewer import TraceReader
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -103,7 +107,7 @@ def error_line(stderr: str) -> str:
 def test_help_names_every_subcommand(script):
     result = cli(script, "--help")
     assert result.returncode == 0, result.stderr
-    for command in ("run", "sweep", "examples", "bench"):
+    for command in ("run", "sweep", "examples", "view", "bench"):
         assert f"\n  {command} " in result.stdout
 
 
@@ -112,12 +116,24 @@ def test_help_names_every_subcommand(script):
     [
         (
             "run",
-            ["--duration", "--gui", "--rtf", "--record", "--record-size", "--per-robot", "--quiet"],
+            [
+                "--duration",
+                "--gui",
+                "--rtf",
+                "--record",
+                "--record-size",
+                "--per-robot",
+                "--camera",
+                "--quiet",
+                "--trace",
+                "--view",
+            ],
         ),
         (
             "sweep",
             ["--seeds", "--set", "--out", "--engine", "--address", "--workers", "--plot", "--keys"],
         ),
+        ("view", ["--port", "--host", "--no-browser", "--follow"]),
         ("examples", ["--list", "--run", "--copy"]),
         ("bench", ["--n", "--large", "--json", "--profile"]),
     ],
@@ -234,6 +250,27 @@ def test_run_records_a_gif(script, scenario, tmp_path):
     with Image.open(out) as image:
         assert (image.format, image.size) == ("GIF", (64, 48))
         assert image.n_frames >= 2
+
+
+def test_run_camera_follows_a_robot_in_the_recording(script, scenario, tmp_path):
+    out = tmp_path / "follow.gif"
+    args = ["--duration", "1", "--record", out, "--record-size", "64x48", "--quiet"]
+    result = cli(script, "run", scenario, *args, "--camera", "follow:r1")
+    assert result.returncode == 0, result.stderr
+    assert out.exists()
+
+
+@pytest.mark.parametrize(
+    ("mode", "message"),
+    [
+        ("fisheye", r"--camera: .*got 'fisheye'"),
+        ("follow:nobody", r"--camera follow:nobody: .*no body called 'nobody'.*r0"),
+    ],
+)
+def test_run_bad_camera_names_the_option_and_value(script, scenario, mode, message):
+    result = cli(script, "run", scenario, "--duration", "1", "--camera", mode)
+    assert result.returncode == 2
+    assert re.search(message, result.stderr), result.stderr
 
 
 def test_run_record_without_pillow_explains_what_to_install(script, scenario, tmp_path):
@@ -628,3 +665,51 @@ def test_the_summary_and_the_monitor_count_objects_alike(scenario, monkeypatch, 
     assert main(["run", str(scenario), "--duration", "0.1"]) == 0
     summary = summary_of(capsys.readouterr().out)
     assert (summary["objects"], summary["robots"]) == (str(objects), str(agents)) == ("3", "2")
+
+
+# ----- traces and the viewer ------------------------------------------------------------------
+
+
+def test_run_trace_writes_a_trace_the_viewer_reads(script, scenario, tmp_path):
+    out = tmp_path / "runs" / "tiny.fatrace"
+    result = cli(script, "run", scenario, "--duration", "2", "--trace", out, "--trace-every", "2")
+    assert result.returncode == 0, result.stderr
+    assert summary_of(result.stdout)["trace"] == str(out)
+    reader = TraceReader(out)
+    assert [f.step for f in reader.frames()] == list(range(0, 21, 2))
+    assert sorted(b["name"] for b in reader.bodies.values()) == ["box", "r0", "r1"]
+
+
+def test_view_rejects_a_cut_trace_naming_file_problem_and_version(script, scenario, tmp_path):
+    out = tmp_path / "t.fatrace"
+    assert cli(script, "run", scenario, "--duration", "1", "--trace", out).returncode == 0
+    cut = tmp_path / "cut.fatrace"
+    cut.write_bytes(out.read_bytes()[:-20])
+    result = cli(script, "view", cut, "--no-browser")
+    assert result.returncode == 2
+    line = error_line(result.stderr)
+    assert str(cut) in line and "truncated" in line and "version 1" in line
+    result = cli(script, "view", tmp_path / "missing.fatrace", "--no-browser")
+    assert result.returncode == 2 and "no such trace file" in error_line(result.stderr)
+
+
+def test_view_serves_the_page_and_the_trace(script, scenario, tmp_path):
+    out = tmp_path / "t.fatrace"
+    assert cli(script, "run", scenario, "--duration", "1", "--trace", out).returncode == 0
+    base = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    with subprocess.Popen(
+        [script, "view", str(out), "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env=base,
+    ) as proc:
+        try:
+            assert proc.stdout is not None
+            line = proc.stdout.readline()  # printed once the server listens
+            url = line.split(" at ", 1)[1].split()[0]
+            with urllib.request.urlopen(url + "trace", timeout=30) as response:
+                assert response.read() == out.read_bytes()
+        finally:
+            proc.send_signal(signal.SIGINT)
+            assert proc.wait(timeout=30) == 0

@@ -137,6 +137,7 @@ def test_the_reference_covers_every_section_field_action_and_plugin():
     assert parts["world"] == {*world_config.SOURCE_KEYS, *world_config.OPTION_KEYS}
     assert parts["plugins"] == set(build.PLUGIN_KEYS)
     assert parts["missions"] == set(missions.MISSION_KEYS)
+    assert parts["trace"] == set(build.TRACE_KEYS)
     assert set(entities.SCENARIO_ENTITY_KEYS) <= parts["entities"]
     for name in entities.ACTION_TYPES:
         assert f"actions (type: {name})" in parts
@@ -154,6 +155,7 @@ def test_the_hand_written_key_texts_match_the_loader():
     assert set(ref.WORLD_TEXT) == {*world_config.SOURCE_KEYS, *world_config.OPTION_KEYS}
     assert set(ref.PLUGIN_TEXT) == set(build.PLUGIN_KEYS)
     assert set(ref.MISSION_TEXT) == set(missions.MISSION_KEYS)
+    assert set(ref.TRACE_TEXT) == set(build.TRACE_KEYS)
 
 
 def test_docstring_sections_are_read_with_shared_and_continued_entries():

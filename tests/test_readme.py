@@ -5,8 +5,10 @@ each runs in a fresh shell, headless, in a scratch folder where ``examples/`` an
 ``benchmarks/`` are the repository's (so files a command writes, such as ``out.gif``, land
 there). Left out: installs (``pip install``) and the test command itself, which CI runs
 anyway, and the lint / type / docs commands that ``.ci/run`` runs itself (a test checks they
-are there, as written). A command that starts a server (``SERVERS``) is started, must answer
-an HTTP request at the address it prints, and is stopped.
+are there, as written). A command that starts a server (``fleet-async view``, ``fleet-async run
+... --view``) is started, must answer an HTTP request at the address it prints, and is
+stopped; the commands before it in its block run first, in the same folder, since it may serve
+what they wrote (``fleet-async view warehouse.fatrace`` after the run that traced it).
 
 A command too long for every CI run (a big sweep) is written with the comment
 ``# long: CI runs the next line`` and followed, on the next line, by a small variant of the
@@ -37,18 +39,21 @@ INSTALLS = ("python -m pip install", "pip install")
 TEST_COMMAND = "python -m pytest -q"
 RUN_BY_CI_SCRIPT = ("ruff ", "mypy ", "mkdocs ")
 SERVERS = ("fleet-async view",)
-"""Commands that serve until stopped: started, asked for their page, stopped."""
+"""Commands that serve until stopped: started, asked for their page, stopped (and
+``fleet-async run ... --view``, see :func:`is_server`)."""
 LONG = "long: CI runs the next line"
 _URL = re.compile(r"https?://[^\s/]+/[^\s)\]>,'\"]*")
 
 
-def readme_commands() -> list[str]:
-    """Every command of the README's bash blocks, comments removed, ``&&`` chains split; a
-    line marked ``# long: CI runs the next line`` is left out (its small variant follows)."""
-    commands: list[str] = []
+def readme_blocks() -> list[list[str]]:
+    """The commands of each of the README's bash blocks, comments removed, ``&&`` chains
+    split; a line marked ``# long: CI runs the next line`` is left out (its small variant
+    follows)."""
+    blocks: list[list[str]] = []
     for block in fenced_blocks(README):
         if block.language not in ("bash", "sh", "shell", "console"):
             continue
+        commands: list[str] = []
         for line in block.code.splitlines():
             if LONG in line:
                 continue
@@ -59,15 +64,35 @@ def readme_commands() -> list[str]:
                 elif command:
                     commands.append(shlex.join(command))
                     command = []
-    return commands
+        blocks.append(commands)
+    return blocks
+
+
+def readme_commands() -> list[str]:
+    """Every command of the README's bash blocks (see :func:`readme_blocks`)."""
+    return [command for block in readme_blocks() for command in block]
+
+
+def runs_here(command: str) -> bool:
+    """Whether the suite runs ``command`` (not an install, the test command or CI's own)."""
+    return (
+        not command.startswith(INSTALLS)
+        and command != TEST_COMMAND
+        and not command.startswith(RUN_BY_CI_SCRIPT)
+    )
+
+
+def is_server(command: str) -> bool:
+    """Whether ``command`` serves until stopped: ``fleet-async view`` and ``fleet-async run
+    ... --view`` (which keeps the live page served after the run)."""
+    words = shlex.split(command)
+    return command.startswith(SERVERS) or (
+        words[:2] == ["fleet-async", "run"] and "--view" in words
+    )
 
 
 COMMANDS = readme_commands()
-RUN_HERE = [
-    c
-    for c in COMMANDS
-    if not c.startswith(INSTALLS) and c != TEST_COMMAND and not c.startswith(RUN_BY_CI_SCRIPT)
-]
+RUN_HERE = [c for c in COMMANDS if runs_here(c)]
 
 
 def scratch(tmp_path: Path) -> Path:
@@ -110,11 +135,11 @@ def test_commands_left_to_the_ci_script_are_in_it_as_written():
             assert command in ci, f".ci/run does not run {command!r}"
 
 
-@pytest.mark.parametrize("command", [c for c in RUN_HERE if not c.startswith(SERVERS)])
-def test_readme_command_runs(command, tmp_path):
+def run_command(command: str, cwd: Path) -> None:
+    """Run one command in ``cwd`` as the README's reader would; it must succeed and print."""
     result = subprocess.run(
         ["bash", "-c", command],
-        cwd=scratch(tmp_path),
+        cwd=cwd,
         env=shell_env(),
         capture_output=True,
         text=True,
@@ -128,12 +153,32 @@ def test_readme_command_runs(command, tmp_path):
     ), "the command line must keep PyBullet's banner off the terminal"
 
 
-def test_readme_server_commands_serve_and_stop(tmp_path):
-    servers = [c for c in RUN_HERE if c.startswith(SERVERS)]
-    if not servers:
-        pytest.skip(f"the README shows no server command ({', '.join(SERVERS)}) yet")
-    for i, command in enumerate(servers):
-        serve_and_stop(command, scratch(tmp_path / str(i)), shell_env())
+@pytest.mark.parametrize("command", [c for c in RUN_HERE if not is_server(c)])
+def test_readme_command_runs(command, tmp_path):
+    run_command(command, scratch(tmp_path))
+
+
+SERVER_COMMANDS = [
+    (block[:i], command)
+    for block in readme_blocks()
+    for i, command in enumerate(block)
+    if runs_here(command) and is_server(command)
+]
+
+
+def test_the_readme_shows_server_commands():
+    assert {command.split()[1] for _, command in SERVER_COMMANDS} >= {"view", "run"}
+
+
+@pytest.mark.parametrize(
+    ("before", "command"), SERVER_COMMANDS, ids=[c for _, c in SERVER_COMMANDS]
+)
+def test_readme_server_command_serves_and_stops(before, command, tmp_path):
+    cwd = scratch(tmp_path)
+    for earlier in before:  # what the server may serve: the block's commands before it
+        if runs_here(earlier) and not is_server(earlier):
+            run_command(earlier, cwd)
+    serve_and_stop(command, cwd, shell_env())
 
 
 def serve_and_stop(command: str, cwd: Path, env: dict[str, str], wait: float = 60.0) -> str:

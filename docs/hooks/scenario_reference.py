@@ -46,6 +46,8 @@ SECTION_TEXT = {
     "classes, usable as an entity's `type:`.",
     "plugins": "A list of simulation plugins (SimPlugin subclasses) (below).",
     "missions": "A list of async functions that run the fleet (below).",
+    "trace": "`OUT.fatrace` or a mapping (below): record a trace of the run for "
+    "`fleet-async view`, from the first frame (`sim.start_trace`).",
 }
 WORLD_TEXT = {
     "world_file": "A Gazebo `.world` file (its `model://` includes are resolved).",
@@ -84,6 +86,12 @@ MISSION_TEXT = {
     "args": "Positional arguments after `sim`.",
     "kwargs": "Keyword arguments.",
     "name": "The mission's name (default: the function's name).",
+}
+TRACE_TEXT = {
+    "path": "The trace file, relative to the working directory (as the command line's output "
+    "files are). A bare string is this key alone.",
+    "every_n_steps": "Record a frame every N steps (default 1).",
+    "fps": "Instead of `every_n_steps`: frames per sim second, rounded to whole steps.",
 }
 
 
@@ -311,6 +319,11 @@ def sections() -> list[tuple[str, str, list[Key]]]:
             'Each entry is `"module:function"` or a mapping; the function is called as '
             "`function(sim, *args, **kwargs)` by `fleet-async run` / `fleet_async.run_scenario`.",
             text_keys(MISSION_TEXT, missions.MISSION_KEYS),
+        ),
+        (
+            "trace",
+            "`sim.start_trace(**trace)`; `fleet-async run --trace` / `--view` replace it.",
+            text_keys(TRACE_TEXT, build.TRACE_KEYS),
         ),
     ]
     return parts

@@ -1,8 +1,9 @@
-"""The ``fleet-async`` command: run scenarios, sweep them, try the examples, benchmark.
+"""The ``fleet-async`` command: run scenarios, sweep them, try the examples, replay traces,
+benchmark.
 
 ``main`` parses the command line and hands it to the subcommand's module (``run``,
-``sweep``, ``examples``; ``bench`` is :mod:`fleet_async.bench`). A subcommand reports a problem
-the user can fix by raising :class:`CliError`, which ``main`` prints as
+``sweep``, ``examples``, ``view``; ``bench`` is :mod:`fleet_async.bench`). A subcommand
+reports a problem the user can fix by raising :class:`CliError`, which ``main`` prints as
 ``fleet-async: error: <message>`` (no traceback) with the error's exit code.
 
 PyBullet's C code prints a build banner when it is imported and, in GUI mode, dozens of lines
@@ -34,6 +35,8 @@ subcommands:
   sweep     run a scenario over a parameter grid and seeds, on a process pool or Ray, into
             one table of fleet KPIs (CSV or Parquet), optionally plotted
   examples  list the bundled examples (the default), run one, or copy them into a folder
+  view      replay a trace (recorded with 'run --trace' or sim.start_trace) in the browser
+            viewer: top-down, play / pause / speed / scrub, click a robot for its events
   bench     run the fleet-scale benchmark: step time, real-time factor, spawn time and
             memory per agent for fleets of N robots
 
@@ -50,6 +53,9 @@ examples:
   fleet-async run examples/scenarios/warehouse.yaml            # the shift its missions run
   fleet-async run my_scenario.yaml --duration 60 --record out.gif --record-size 400x300
   fleet-async run my_scenario.yaml --duration 30 --save-state warm.ckpt   # branch a sweep
+  fleet-async run examples/scenarios/pick_drop.yaml --record out.gif --camera follow:robot0
+  fleet-async run examples/scenarios/warehouse.yaml --trace warehouse.fatrace
+  fleet-async run examples/scenarios/warehouse.yaml --view     # watch it live
 
 How long a run lasts: --duration S if given, else the scenario's simulation.duration if it
 sets one (> 0), else until the scenario's work is done: every mission it names has returned
@@ -133,6 +139,22 @@ def _add_examples(subparsers: argparse._SubParsersAction[argparse.ArgumentParser
     parser.set_defaults(handler=examples.execute)
 
 
+def _add_view(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from fleet_async.cli import view
+
+    parser = subparsers.add_parser(
+        "view",
+        help="replay a trace in the browser viewer",
+        description=(view.__doc__ or "").strip(),
+        epilog="examples:\n  fleet-async run examples/scenarios/warehouse.yaml --trace wh.fatrace\n"
+        "  fleet-async view wh.fatrace\n  fleet-async view wh.fatrace --port 0 --no-browser",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        parents=[_common_options(argparse.SUPPRESS)],
+    )
+    view.add_arguments(parser)
+    parser.set_defaults(handler=view.execute)
+
+
 def _run_bench(args: argparse.Namespace) -> int:
     from fleet_async import bench
 
@@ -176,6 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run(subparsers)
     _add_sweep(subparsers)
     _add_examples(subparsers)
+    _add_view(subparsers)
     _add_bench(subparsers)
     return parser
 

@@ -7,7 +7,9 @@ is meant for interactive use; a command-line run goes as fast as it can). The ru
 :func:`fleet_async.scenario_runner.run_scenario`: the scenario's missions and queued actions,
 for ``--duration`` / ``simulation.duration`` or until its work is done (at most 600 s). The
 summary includes the run's fleet KPIs (``sim.kpis()``, the row a sweep records per run), up to
-the run's last step.
+the run's last step. ``--camera`` picks what the GUI and ``--record`` look at; ``--trace``
+records a trace for ``fleet-async view`` and ``--view`` serves it live while the run writes it
+(``live_view.py``).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
+from fleet_async.cli import live_view
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar
 from fleet_async.cli.tables import format_table
@@ -29,6 +32,7 @@ from fleet_async.core import CheckpointError, FleetKpis, RobotKpis
 from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
+from fleet_async.core.sim.camera_config import parse_camera_mode
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
@@ -88,6 +92,14 @@ def _positive_int(text: str) -> int:
     if not text.isdigit() or int(text) <= 0:
         raise argparse.ArgumentTypeError(f"expected a whole number > 0, got {text!r}")
     return int(text)
+
+
+def _camera_mode(text: str) -> str:
+    try:
+        parse_camera_mode(text, "--camera")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--camera: ")) from None
+    return text
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -154,6 +166,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "waiting / idle time, actions, tasks, collisions, battery)",
     )
     parser.add_argument(
+        "--camera",
+        type=_camera_mode,
+        metavar="MODE",
+        help="what the GUI window and --record look at (replaces the scenario's "
+        "camera_config.camera_mode): auto (the whole scene, widening when a robot drives out "
+        "of view; the default), top_down, orbit, fleet (follows the robots), follow:NAME "
+        "(follows the body called NAME) or manual (camera_config's camera_distance / yaw / "
+        "pitch / target)",
+    )
+    parser.add_argument(
+        "--trace",
+        metavar="OUT.fatrace",
+        help="record a trace of the run (every body's pose per frame and the event log) for "
+        "'fleet-async view'; replaces a 'trace:' section of the scenario",
+    )
+    parser.add_argument(
+        "--trace-every",
+        type=_positive_int,
+        default=1,
+        metavar="N",
+        help="record a trace frame every N steps (default: 1, every step)",
+    )
+    parser.add_argument(
+        "--view",
+        action="store_true",
+        help="watch the run live in the browser viewer (traces to --trace, or to "
+        "SCENARIO.fatrace in the working directory); after the run the page stays served "
+        "until Ctrl+C",
+    )
+    parser.add_argument(
+        "--view-port",
+        type=int,
+        default=8765,
+        metavar="PORT",
+        help="port of the --view page (default 8765; 0: any free port)",
+    )
+    parser.add_argument(
         "--quiet",
         action="store_true",
         help="print nothing (no progress bar, no summary); errors still go to stderr",
@@ -163,7 +212,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 # ----- loading --------------------------------------------------------------------------------
 
 
-def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimulationCore:
+def load_scenario(
+    path: Path, gui_on: bool, rtf: float | None, *, drop_trace: bool = False
+) -> MultiRobotSimulationCore:
     """Build the simulation of the scenario file at ``path`` (as ``from_yaml`` does).
 
     Args:
@@ -171,11 +222,14 @@ def load_scenario(path: Path, gui_on: bool, rtf: float | None) -> MultiRobotSimu
         gui_on: Value for ``gui``, replacing the scenario's.
         rtf: Value for ``target_rtf``; None keeps the scenario's with a GUI (0 if it sets
             none) and runs headless runs as fast as possible.
+        drop_trace: Ignore the scenario's ``trace:`` section (the command line traces).
 
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
     """
     config = load_yaml_config(path)
+    if drop_trace and isinstance(config, dict):
+        config.pop("trace", None)
     if any(key in SCENARIO_SECTIONS for key in config):
         if config.get("simulation") is None:
             config["simulation"] = {}
@@ -240,6 +294,7 @@ class RunSummary:
         missions: The scenario's missions (its ``missions:`` entries).
         stopped: Why the run stopped, for people (empty when interrupted).
         recording: The saved recording, if any.
+        trace: The saved trace, if any.
         interrupted: Whether Ctrl+C stopped the run early.
         kpis: The run's fleet KPIs (``sim.kpis().summary()``), shown after the collisions.
         devices: Agents in the simulation at the end that are devices (doors, lifts,
@@ -260,6 +315,7 @@ class RunSummary:
     interrupted: bool = False
     kpis: FleetKpis | None = None
     devices: int = 0
+    trace: str | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -303,6 +359,8 @@ def format_summary(summary: RunSummary) -> str:
         rows.append(("stopped", summary.stopped))
     if summary.recording is not None:
         rows.append(("recording", summary.recording))
+    if summary.trace is not None:
+        rows.append(("trace", summary.trace))
     if summary.interrupted:
         rows.append(("interrupted", "yes (Ctrl+C)"))
     return "\n".join(f"{name + ':':<19}{value}" for name, value in rows)
@@ -355,13 +413,22 @@ def execute(args: argparse.Namespace) -> int:
     """Run the ``run`` command; return the exit code."""
     path = Path(args.scenario)
     try:
-        sim = load_scenario(path, args.gui, args.rtf)
+        sim = load_scenario(path, args.gui, args.rtf, drop_trace=bool(args.trace or args.view))
     except (ValueError, TypeError, OSError) as exc:
         raise CliError(str(exc)) from exc
     try:
-        return _run_loaded(sim, args)
+        return _run_loaded(sim, path, args)
     finally:
         sim.close()
+
+
+def _set_camera(sim: MultiRobotSimulationCore, mode: str) -> None:
+    """``--camera MODE``: the scenario's camera_config with ``camera_mode`` replaced."""
+    sim.params.camera_config = {**(sim.params.camera_config or {}), "camera_mode": mode}
+    try:
+        sim.setup_camera()  # frames the GUI window; finds a follow:NAME body or says not
+    except ValueError as exc:
+        raise CliError(f"--camera {mode}: {exc}") from exc
 
 
 def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> None:
@@ -370,6 +437,17 @@ def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) ->
         sim.start_recording(args.record, width=width, height=height, fps=args.record_fps)
     except (ImportError, ValueError) as exc:
         raise CliError(f"--record {args.record}: {exc}") from exc
+
+
+def _start_trace(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> None:
+    out = args.trace or f"{path.stem}.fatrace"
+    try:
+        # A live page polls the file: write buffered frames four times a wall second.
+        sim.start_trace(
+            out, every_n_steps=args.trace_every, flush_seconds=0.25 if args.view else 1.0
+        )
+    except (OSError, ValueError) as exc:
+        raise CliError(f"--trace {out}: {exc}") from exc
 
 
 class StepWatcher:
@@ -412,10 +490,15 @@ def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | No
     return float(sim.params.duration) if sim.params.duration > 0 else None
 
 
-def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
+def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
     kpis = sim.kpis()
+    if args.camera:
+        _set_camera(sim, args.camera)
     if args.record:
         _start_recording(sim, args)
+    if args.trace or args.view:
+        _start_trace(sim, path, args)
+    live = live_view.start(sim, args.view_port) if args.view else None
     if args.gui:
         sim.setup_monitor()
     limit = _limit(sim, args.duration)
@@ -446,6 +529,7 @@ def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     if bar is not None:
         bar.finish(sim.sim_time - start_time)
     saved = sim.stop_recording() if args.record else None
+    trace = sim.stop_trace()
     if args.save_state:
         try:
             sim.save_state(args.save_state)
@@ -454,11 +538,15 @@ def _run_loaded(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> int:
     if not args.quiet:
         row = kpis.summary()
         print(
-            format_summary(_summarize(sim, row, sim.step_count - start_step, wall, outcome, saved))
+            format_summary(
+                _summarize(sim, row, sim.step_count - start_step, wall, outcome, saved, trace)
+            )
         )
         if args.per_robot:
             robots = [r.as_dict() for r in kpis.per_robot()]
             print(f"\nper robot:\n{format_table(robots, RobotKpis.columns())}")
+    if live is not None:
+        live_view.serve_until_interrupted(live, keep=outcome is not None)
     return INTERRUPTED_EXIT_CODE if outcome is None else 0
 
 
@@ -469,6 +557,7 @@ def _summarize(
     wall: float,
     outcome: ScenarioOutcome | None,
     recording: str | None,
+    trace: str | None = None,
 ) -> RunSummary:
     devices = sum(1 for agent in sim.agents if not cast("Agent", agent).is_robot)
     return RunSummary(
@@ -483,6 +572,7 @@ def _summarize(
         missions=len(sim.scenario_missions),
         stopped=outcome.describe() if outcome is not None else "",
         recording=recording,
+        trace=trace,
         interrupted=outcome is None,
         kpis=row,
         devices=devices,

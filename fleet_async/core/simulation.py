@@ -9,15 +9,19 @@ scenarios and worlds (``scenario/``), recording, the monitor and the GUI (``view
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from fleet_async.core.checkpoint.api import CheckpointApi
 from fleet_async.core.metrics.kpis import KpiApi
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
+from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.view.gui import GuiApi, handle_keyboard
 from fleet_async.core.view.monitor import MonitorApi
 from fleet_async.core.view.recording import RecordingApi
 from fleet_async.core.view.runner import run_loop
+from fleet_async.core.view.trace import TraceApi
 
 __all__ = ["MultiRobotSimulationCore"]
 
@@ -26,6 +30,7 @@ class MultiRobotSimulationCore(
     ScenarioApi,
     WorldLoadingApi,
     RecordingApi,
+    TraceApi,
     MonitorApi,
     GuiApi,
     KpiApi,
@@ -40,6 +45,12 @@ class MultiRobotSimulationCore(
             ``enable_collision_color_change`` is on.
     """
 
+    def __init__(
+        self, params: SimulationParams | None = None, collision_color: Sequence[float] | None = None
+    ) -> None:
+        super().__init__(params, collision_color)
+        self._start_gui_camera()
+
     def run_simulation(self, duration: float | None = None) -> None:
         """Step for ``duration`` sim seconds (``params.duration`` if None; <= 0 runs until Ctrl+C).
 
@@ -48,6 +59,7 @@ class MultiRobotSimulationCore(
         if not self._initialized:
             self.initialize_simulation()
         run_for = self._params.duration if duration is None else duration
+        self._frame_gui_camera()
         self.setup_monitor()
         try:
             run_loop(self, float(run_for), idle=self._gui_idle if self.is_gui else None)
@@ -58,7 +70,16 @@ class MultiRobotSimulationCore(
     def _gui_idle(self) -> None:
         handle_keyboard(self)
 
+    def reset(self, seed: int | None = None) -> None:
+        """Finish a running trace (its clock cannot go back), then reset the kernel; the GUI
+        camera frames the new scene at the next step."""
+        self.stop_trace()
+        super().reset(seed)
+        self._frame_gui_camera(restart=True)
+
     def close(self) -> None:
-        """Disconnect from PyBullet; the simulation cannot step afterwards."""
+        """Finish a running trace, stop the monitor and disconnect from PyBullet; the
+        simulation cannot step afterwards."""
+        self.stop_trace()
         self._stop_monitor()
         super().close()

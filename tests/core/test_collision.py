@@ -128,6 +128,37 @@ def test_events_fire_once_per_contact_and_count():
         assert sim.get_active_collision_pairs() == [(a.object_id, b.object_id)]
 
 
+def test_a_collision_listener_hears_each_check_once_with_its_pairs():
+    with make_sim() as sim:
+        a, b, c = cube(sim, 0.0), cube(sim, 0.15), cube(sim, 3.0)
+        heard = []
+
+        def listener(ended, started):
+            assert ended.dtype == started.dtype == np.int64
+            heard.append(
+                (
+                    sim.step_count,
+                    [tuple(pair) for pair in ended.tolist()],
+                    [tuple(pair) for pair in started.tolist()],
+                )
+            )
+
+        sim.add_collision_listener(listener)
+        sim.step_once()
+        c.set_pose(Pose.from_xyz(0.15, 0.15, 0.5))  # touches both
+        sim.step_once()
+        b_id = b.object_id
+        sim.remove_object(b)
+        sim.step_once()
+        sim.step_once()  # nothing changes: no call
+        assert sim.remove_collision_listener(listener)
+        assert not sim.remove_collision_listener(listener)
+        c.set_pose(Pose.from_xyz(5.0, 0.0, 0.5))
+        sim.step_once()
+        ab, ac, bc = (a.object_id, b_id), (a.object_id, c.object_id), (b_id, c.object_id)
+        assert heard == [(0, [], [ab]), (1, [], [ac, bc]), (2, [ab, bc], [])]
+
+
 def test_removing_an_object_ends_its_contacts():
     with make_sim() as sim:
         a, b = cube(sim, 0.0), cube(sim, 0.15)

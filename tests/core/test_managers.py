@@ -9,7 +9,6 @@ from contextlib import contextmanager
 import numpy as np
 import pybullet as p
 import pytest
-from conftest import headless_params
 
 from fleet_async import (
     Agent,
@@ -30,6 +29,7 @@ from fleet_async import (
     register_entity_class,
 )
 from fleet_async.core.managers import sim_object_manager as managers
+from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.2, 0.2, 0.1])
 

@@ -10,7 +10,6 @@ import numpy as np
 import pybullet as p
 import pytest
 import yaml
-from conftest import headless_params
 
 from fleet_async import (
     Agent,
@@ -28,6 +27,7 @@ from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.devices import Device
 from fleet_async.core.managers import sim_object_manager as managers
 from fleet_async.core.scenario import build as scenario
+from tests.conftest import headless_params
 
 DATA = FsPath(__file__).resolve().parent.parent / "data" / "scenarios"
 EXAMPLES = sorted((FsPath(__file__).resolve().parents[2] / "examples" / "scenarios").glob("*.yaml"))

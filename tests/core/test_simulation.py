@@ -354,7 +354,7 @@ def test_batch_spawn_and_scene_bounds(sim):
     center, extent = sim.compute_scene_bounds()
     assert center == [1.5, 3.0, 0.5] and extent == [3.0, 6.0, 0.0]
     distance, _yaw, pitch, target = sim.setup_camera({"camera_view_type": "top_down"})
-    assert target == center and pitch == -89.9 and distance > 0
+    assert target == pytest.approx(center) and pitch == -89.9 and distance > 0
     with pytest.raises(ValueError, match="camera_zoom"):
         sim.setup_camera({"camera_zoom": 2})
 

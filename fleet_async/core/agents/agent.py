@@ -31,6 +31,7 @@ from fleet_async.core.motion.chain import build_controller_chain
 from fleet_async.core.motion.controllers import Controller
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.motion.joints import JointSet
+from fleet_async.core.world.link_colours import one_colour_per_link
 
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
@@ -287,6 +288,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
             )
         except p.error as exc:
             raise ValueError(f"urdf_path {path!r}: PyBullet could not load it ({exc})") from exc
+        one_colour_per_link(client, body, path)  # the GUI and recordings show it alike
         if mass == 0.0:
             for link in range(-1, p.getNumJoints(body, physicsClientId=client)):
                 p.changeDynamics(body, link, mass=0.0, physicsClientId=client)

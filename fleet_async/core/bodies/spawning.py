@@ -23,6 +23,7 @@ import pybullet as p
 
 from fleet_async.core.base.paths import resolve_data_file
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.world.link_colours import one_colour_per_link
 from fleet_async.core.world.pending import PENDING_BODY, Deferred, PendingBody
 from fleet_async.core.world.shapes import get_or_create_shapes, record_body_shape
 
@@ -252,6 +253,7 @@ def load_sdf_objects(
     objects: list[T] = []
     try:
         for i, body in enumerate(bodies):
+            one_colour_per_link(client, body)  # the GUI and recordings show it alike
             if use_fixed_base:
                 p.changeDynamics(body, -1, mass=0.0, physicsClientId=client)
             objects.append(

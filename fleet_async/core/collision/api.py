@@ -9,12 +9,15 @@ the system itself (``system.py``).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from fleet_async.core.base.types import SpatialHashCellSizeMode, coerce_enum
 
 if TYPE_CHECKING:
-    from fleet_async.core.collision.system import CollisionSystem
+    from fleet_async.core.collision.system import CollisionListener, CollisionSystem
     from fleet_async.core.world.world import World
 
 __all__ = ["CollisionApi"]
@@ -40,6 +43,27 @@ class CollisionApi:
     def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
         """``{object_id: (aabb_min, aabb_max)}`` of every object taking part in collisions."""
         return self._collision.get_aabbs()
+
+    def get_aabb_bounds(
+        self, object_ids: Sequence[int] | None = None
+    ) -> tuple[list[float], list[float]] | None:
+        """(min, max) corners (m, world frame) of the union of the objects' AABBs.
+
+        Args:
+            object_ids: The objects (default: every object taking part in collisions). Ids of
+                objects without an AABB (collision mode DISABLED, removed) are skipped.
+
+        Returns:
+            The two corners, or None when no object given has an AABB.
+        """
+        rows = None
+        if object_ids is not None:
+            objects = (self._world.get(i) for i in object_ids)
+            rows = np.fromiter(
+                (obj.state_row for obj in objects if obj is not None), dtype=np.int64
+            )
+        bounds = self._collision.bounds(rows)
+        return None if bounds is None else (bounds[0].tolist(), bounds[1].tolist())
 
     def filter_aabb_pairs(
         self,
@@ -78,6 +102,27 @@ class CollisionApi:
     def get_active_collision_pairs(self) -> list[tuple[int, int]]:
         """Pairs (object_id_i < object_id_j) in contact as of the last check."""
         return self._collision.active_pairs()
+
+    def add_collision_listener(self, listener: CollisionListener) -> None:
+        """Call ``listener(ended, started)`` after every check that changed the active pairs.
+
+        ``ended`` and ``started`` are (K, 2) int64 numpy arrays of object-id pairs ``(a, b)``
+        with ``a < b``, in ascending order (``ended.tolist()`` gives plain pairs); a pair whose
+        object left the simulation ends at the next check. Listeners must not modify them.
+        One call per check however many pairs changed, made from the active pairs' arrays
+        without a Python loop over pairs, so a recorder that wants every contact of a large
+        fleet pays per check rather than per ``collision_started`` / ``collision_ended`` event
+        (and nothing at all while nobody listens). Listeners run after the events, in the
+        order they were added.
+        """
+        self._collision.listeners.append(listener)
+
+    def remove_collision_listener(self, listener: CollisionListener) -> bool:
+        """Stop calling ``listener``; return whether it was added."""
+        if listener in self._collision.listeners:
+            self._collision.listeners.remove(listener)
+            return True
+        return False
 
     def set_collision_check_frequency(self, frequency: float | None = None) -> None:
         """Check every step (None), never (0), or at ``frequency`` Hz of sim time."""

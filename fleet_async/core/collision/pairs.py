@@ -13,7 +13,7 @@ import numpy as np
 
 from fleet_async.core.world.state import KinematicState
 
-__all__ = ["ActivePairs"]
+__all__ = ["ActivePairs", "decode", "id_pairs", "pair_codes"]
 
 _SHIFT = np.int64(32)
 _LOW = np.int64((1 << 32) - 1)
@@ -29,6 +29,14 @@ def pair_codes(ids: np.ndarray) -> np.ndarray:
 def decode(codes: np.ndarray) -> list[tuple[int, int]]:
     """``[(a, b), ...]`` object-id pairs of codes, in their order."""
     return list(zip((codes >> _SHIFT).tolist(), (codes & _LOW).tolist(), strict=True))
+
+
+def id_pairs(codes: np.ndarray) -> np.ndarray:
+    """(K, 2) int64 object-id pairs ``(a, b)`` of codes, in their order."""
+    out = np.empty((len(codes), 2), dtype=np.int64)
+    np.right_shift(codes, _SHIFT, out=out[:, 0])
+    np.bitwise_and(codes, _LOW, out=out[:, 1])
+    return out
 
 
 class ActivePairs:

@@ -26,13 +26,17 @@ from fleet_async.core.base.types import CollisionDetectionMethod, SpatialHashCel
 from fleet_async.core.collision.broadphase import auto_cell_size, candidate_pairs
 from fleet_async.core.collision.geometry import CollisionGeometry
 from fleet_async.core.collision.narrowphase import NarrowPhase
-from fleet_async.core.collision.pairs import ActivePairs, decode, pair_codes
+from fleet_async.core.collision.pairs import ActivePairs, decode, id_pairs, pair_codes
 from fleet_async.core.world.state import COLLISION_CODES
 
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["CollisionSystem"]
+__all__ = ["CollisionListener", "CollisionSystem"]
+
+CollisionListener = Callable[[np.ndarray, np.ndarray], None]
+"""Called as ``listener(ended, started)`` once per check that changed the active pairs: each a
+(K, 2) int64 array of object ids ``(a, b)``, ``a < b``, in ascending order."""
 
 _STATIC = COLLISION_CODES["static"]
 _DISABLED = COLLISION_CODES["disabled"]
@@ -78,6 +82,8 @@ class CollisionSystem:
         self._active = ActivePairs()
         self._colors: dict[int, list[Any]] = {}
         self._next_due_step = 0
+        self.listeners: list[CollisionListener] = []
+        """Told the pairs that ended and started, once per check that changed any."""
         self._layout = -1  # store layout version the cached row sets below belong to
         self._rows = np.empty(0, dtype=np.int64)  # rows taking part, ascending
         self._all_rows = False  # rows == arange(high): views instead of gathers
@@ -215,6 +221,16 @@ class CollisionSystem:
         self._static = static if static.any() else None
         self._plain = self._static is None and not geo.articulated[self._rows].any()
         self._layout = store.layout_version
+
+    def bounds(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """(min, max) corners of the union of the (unpadded) AABBs of ``rows`` (default: all
+        taking part) that have one; None when none has."""
+        self._prepare()
+        rows = self._rows if rows is None else rows[np.isin(rows, self._rows)]
+        if not len(rows):
+            return None
+        lo, hi = self.geometry.unpadded(rows)
+        return lo.min(axis=0), hi.max(axis=0)
 
     def get_aabbs(self) -> dict[int, tuple[list[float], list[float]]]:
         """``{object_id: (aabb_min, aabb_max)}`` for every object that takes part."""
@@ -394,6 +410,10 @@ class CollisionSystem:
                     for me, other in ((obj_a, obj_b), (obj_b, obj_a)):
                         if me is not None and me.has_event_bus():
                             me.events.emit(event, sim=sim, obj_a=obj_a, obj_b=obj_b, other=other)
+        if self.listeners:  # one call per check, arrays decoded without a loop over pairs
+            ended_ids, started_ids = id_pairs(ended), id_pairs(started)
+            for listener in tuple(self.listeners):
+                listener(ended_ids, started_ids)
         if self.color_change:
             self._recolor(color if color is not None else sim.collision_color)
 

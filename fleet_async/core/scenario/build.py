@@ -14,6 +14,9 @@ nested layout is recognised by any of these sections, applied in this order:
 - ``missions``: ``["module:function" | {function, args, kwargs, name}]``, async functions that
   run the fleet, resolved at load (``scenario/missions.py``) and kept in
   ``sim.scenario_missions``; ``fleet_async.run_scenario`` / ``fleet-async run`` run them.
+- ``trace``: ``OUT.fatrace`` or ``{path: OUT.fatrace, every_n_steps: N | fps: F}``; the built
+  simulation records a trace from its first frame (``sim.start_trace``). ``path`` is relative
+  to the working directory, as the command line's output files are.
 
 Relative files (``urdf_path``, a shape's ``mesh_path``, world files) are looked up next to the
 scenario file first (``base_dir``). Every error names the section and key (``entities[2].grid``),
@@ -60,6 +63,7 @@ __all__ = [
     "PLUGIN_KEYS",
     "SCENARIO_SECTIONS",
     "SIM_PLUGIN_REGISTRY",
+    "TRACE_KEYS",
     "ScenarioApi",
     "register_sim_plugin",
 ]
@@ -72,6 +76,7 @@ SCENARIO_SECTIONS = (
     "entity_classes",
     "plugins",
     "missions",
+    "trace",
 )
 """Top-level sections of the nested layout."""
 
@@ -240,10 +245,29 @@ def _build(
         for label, cls, plugin_config, frequency in plugins:
             with config_context(where, label):
                 sim.register_plugin(cls, config=plugin_config, frequency=frequency)
+        # Frames the GUI window on the scene now, and finds a follow:NAME body or says not.
+        with config_context(where, "simulation.camera_config"):
+            sim.setup_camera()
+        if config.get("trace") is not None:
+            _start_trace(sim, config["trace"], where)
     except BaseException:
         sim.close()
         raise
     return sim
+
+
+TRACE_KEYS = ("path", "every_n_steps", "fps")
+"""Keys of the ``trace:`` section (``sim.start_trace``'s arguments)."""
+
+
+def _start_trace(sim: MultiRobotSimulationCore, entry: Any, where: str) -> None:
+    """The ``trace:`` section: a path, or ``{path, every_n_steps | fps}``."""
+    options = {"path": entry} if isinstance(entry, str) else entry
+    expect_type(options, dict, "a path or a mapping {path, every_n_steps | fps}", where, "trace")
+    reject_unknown_keys(list(options), TRACE_KEYS, where, "trace")
+    expect_type(options.get("path"), str, "a file path (string)", where, "trace.path")
+    with config_context(where, "trace"):
+        sim.start_trace(**options)
 
 
 def _check_flat_keys(config: Mapping[str, Any], where: str) -> None:

@@ -54,6 +54,7 @@ from fleet_async.core.scenario.world_config import (
     read_world_config,
 )
 from fleet_async.core.world.backend import native_output_logged
+from fleet_async.core.world.link_colours import one_colour_per_link
 from fleet_async.core.world.shapes import forget_body_shape, record_body_shape
 
 if TYPE_CHECKING:
@@ -173,6 +174,7 @@ class BodyLoader:
         for body in bodies:
             for link in range(-1, p.getNumJoints(body, physicsClientId=self.client)):
                 p.changeDynamics(body, link, mass=0.0, physicsClientId=self.client)
+            one_colour_per_link(self.client, body)  # the GUI and recordings show it alike
         return bodies
 
     def add(self, name: str, body: int, user_data: dict[str, Any], shape: int = -1) -> None:

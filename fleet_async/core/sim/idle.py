@@ -5,10 +5,11 @@ A step is empty when running it would change nothing but the clock: no body move
 callback is due, no action starts, is polled or times out, no collision check has anything new
 to look at, nothing listens to every step (PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE
 handlers on the simulation's bus or an object's, which includes a running recorder, and the
-GUI), and step timing is not being
-logged. ``IdleSteps`` answers how many of the next steps are empty and
-advances the clock over them as if they had run: every schedule stays exact because nothing in
-the span was due, and collision checks that fall due in it would have found nothing new.
+GUI), and step timing is not being logged. Step observers (``sim.add_step_observer``, e.g. a
+trace writer) only watch, so they do not count; they hear of a skipped span from
+STEPS_SKIPPED. ``IdleSteps`` answers how many of the next steps are empty and advances the
+clock over them as if they had run: every schedule stays exact because nothing in the span was
+due, and collision checks that fall due in it would have found nothing new.
 
 The drivers use it (``run_simulation`` and the mission driver); ``step_once`` never skips.
 """

@@ -11,7 +11,7 @@ phases in order, each a call into the module that owns it:
    ``sync_pybullet_every_step``; otherwise PyBullet is synced lazily).
 6. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
 7. ``collision_check``  - the collision pipeline, when due (``collision/``).
-8. ``events_post_step`` - the clock advances, POST_STEP event (then, with
+8. ``events_post_step`` - the clock advances, POST_STEP event, step observers (then, with
    ``sync_pybullet_every_step``, what its handlers wrote is pushed too).
 
 Profiling (``return_profiling``, ``profiling.py``) runs the same phases through a timer.
@@ -106,6 +106,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         self._managers: list[Any] = []
         self._joint_motion = JointMotion(self._fleet.wake_action)
         self._motion_systems: list[MotionSystem] = [self._fleet, self._joint_motion]
+        self._step_observers: list[Callable[[int], None]] = []
         self._step_count = 0
         self._collision_count = 0
         self._paused = False
@@ -271,6 +272,24 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         if system in self._motion_systems:
             self._motion_systems.remove(system)
 
+    def add_step_observer(self, observer: Callable[[int], None]) -> None:
+        """Call ``observer(step_count)`` at the end of every step, after the POST_STEP handlers.
+
+        An observer only watches (a trace writer): it must not change the simulation. Unlike a
+        POST_STEP handler it therefore does not make every step count for :meth:`idle_steps`,
+        so the drivers still skip empty steps; it hears of a skipped span from the
+        STEPS_SKIPPED event instead.
+        """
+        if observer not in self._step_observers:
+            self._step_observers.append(observer)
+
+    def remove_step_observer(self, observer: Callable[[int], None]) -> bool:
+        """Stop calling ``observer``; return whether it was added."""
+        if observer in self._step_observers:
+            self._step_observers.remove(observer)
+            return True
+        return False
+
     # ----- the step loop ------------------------------------------------------------------
 
     def step_once(self, return_profiling: bool = False) -> dict[str, Any] | None:
@@ -370,6 +389,9 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
                 dt=self._params.timestep,
                 sim_time=self.sim_time,
             )
+        if self._step_observers:
+            for observer in tuple(self._step_observers):
+                observer(self._step_count)
         if self._params.sync_pybullet_every_step:  # what POST_STEP handlers wrote, too
             self.sync_pybullet()
 

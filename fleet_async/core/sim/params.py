@@ -13,6 +13,7 @@ from fleet_async.core.base.types import (
     SpatialHashCellSizeMode,
     coerce_enum,
 )
+from fleet_async.core.sim.camera_config import CameraConfig, parse_camera_config
 
 __all__ = ["LOG_LEVELS", "SimulationParams"]
 
@@ -48,6 +49,9 @@ class SimulationParams:
         log_level: Level of the ``fleet_async`` logger ("debug" ... "critical").
         max_steps_per_frame: Steps run back to back to catch up when pacing falls behind.
         gui_min_fps: Minimum GUI redraw rate while pacing.
+        camera_config: What the GUI camera and recordings look at: ``camera_mode`` (auto,
+            top_down, orbit, fleet, follow:NAME, manual) and the reference API's other
+            ``camera_*`` keys; see ``sim/camera_config.py``.
         seed: Seed of the simulation's random generator (``sim.rng``).
         enable_collision_shapes: GUI: draw collision shapes instead of visual ones.
         enable_structure_transparency: GUI: draw static structures (the world) see-through.
@@ -150,6 +154,7 @@ class SimulationParams:
             self.camera_config,
             "a mapping or None",
         )
+        parse_camera_config(self.camera_config, "SimulationParams.camera_config")
         if self.model_paths is not None:
             _require(
                 isinstance(self.model_paths, (list, tuple))
@@ -225,6 +230,11 @@ class SimulationParams:
             if f.type in ("bool", bool):
                 value = getattr(self, f.name)
                 _require(isinstance(value, bool), f.name, value, "true or false")
+
+    @property
+    def camera(self) -> CameraConfig:
+        """``camera_config`` checked and parsed (``sim/camera_config.py``)."""
+        return parse_camera_config(self.camera_config, "SimulationParams.camera_config")
 
     @property
     def resolved_collision_detection_method(self) -> CollisionDetectionMethod:

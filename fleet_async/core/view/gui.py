@@ -1,16 +1,22 @@
-"""GUI concerns: visualizer flags, camera framing and keyboard shortcuts (no-ops headless).
+"""GUI concerns: visualizer flags, the camera and keyboard shortcuts (no-ops headless).
 
 ``GuiApi`` is the simulation's side of it (``setup_camera``, ``configure_visualizer``, ...).
+With a GUI, a :class:`GuiCamera` frames the window on the scene when the run starts and keeps
+it there per ``camera_config`` (``view/camera.py`` computes the views, as for recordings).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import pybullet as p
+
+from fleet_async.core.base.events import SimEvents
+from fleet_async.core.sim.camera_config import CAMERA_KEYS, parse_camera_config
+from fleet_async.core.view.camera import DEFAULT_FOV_DEG, CameraView, SceneCamera, box_view
 
 if TYPE_CHECKING:
     from fleet_async.core.sim.params import SimulationParams
@@ -19,22 +25,18 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CAMERA_KEYS",
+    "ORBIT_DEGREES_PER_SECOND",
     "GuiApi",
-    "camera_view",
+    "GuiCamera",
     "configure_visualizer",
+    "gui_projection",
     "handle_keyboard",
     "scene_bounds",
 ]
 
-CAMERA_KEYS = (
-    "camera_mode",
-    "camera_view_type",
-    "camera_auto_scale",
-    "camera_distance",
-    "camera_yaw",
-    "camera_pitch",
-    "camera_target",
-)
+ORBIT_DEGREES_PER_SECOND = 6.0
+"""How fast the GUI's ``orbit`` camera turns: once a minute of sim time."""
+_UPDATE_SECONDS = 0.1  # sim seconds between two GUI camera updates
 
 
 def scene_bounds(positions: np.ndarray) -> tuple[list[float], list[float]]:
@@ -46,44 +48,61 @@ def scene_bounds(positions: np.ndarray) -> tuple[list[float], list[float]]:
     return center.tolist(), extent.tolist()
 
 
-def camera_view(
-    camera_config: dict[str, Any] | None, center: Sequence[float], extent: Sequence[float]
-) -> tuple[float, float, float, list[float]]:
-    """Resolve (distance, yaw, pitch, target) from a camera config and the scene bounds.
+def gui_projection(client: int) -> tuple[float, float]:
+    """(vertical field of view in degrees, width / height) of the GUI window's camera."""
+    proj = p.getDebugVisualizerCamera(physicsClientId=client)[3]
+    if not proj or not proj[0] or not proj[5]:
+        return DEFAULT_FOV_DEG, 4.0 / 3.0
+    return math.degrees(2.0 * math.atan(1.0 / proj[5])), proj[5] / proj[0]
 
-    ``camera_mode`` "auto" (default) frames the scene; "manual" uses ``camera_distance``,
-    ``camera_yaw``, ``camera_pitch`` (degrees) and ``camera_target``. ``camera_view_type``
-    "top_down" looks straight down; "perspective" (default) from 45 degrees.
 
-    Raises:
-        ValueError: for an unknown key or mode, naming it.
+class GuiCamera:
+    """Keeps the GUI camera on the scene per ``camera_config``.
+
+    Framed on the first step after it is (re)started, then updated every 0.1 sim seconds, and
+    told PyBullet only when the view changed: ``auto`` / ``top_down`` change only when a body
+    leaves the view (so a camera moved by hand stays until then), ``fleet`` and ``follow``
+    track their bodies, ``orbit`` turns (:data:`ORBIT_DEGREES_PER_SECOND`), ``manual`` stays.
     """
-    cfg = dict(camera_config or {})
-    unknown = sorted(set(cfg) - set(CAMERA_KEYS))
-    if unknown:
-        raise ValueError(
-            f"camera_config: unknown key(s) {unknown}; valid keys are {list(CAMERA_KEYS)}"
-        )
-    mode = cfg.get("camera_mode", "auto")
-    if mode == "manual":
-        return (
-            float(cfg.get("camera_distance", 10.0)),
-            float(cfg.get("camera_yaw", 0.0)),
-            float(cfg.get("camera_pitch", -45.0)),
-            [float(v) for v in cfg.get("camera_target", [0.0, 0.0, 0.0])],
-        )
-    if mode != "auto":
-        raise ValueError(f"camera_config.camera_mode: expected 'auto' or 'manual', got {mode!r}")
-    view = cfg.get("camera_view_type", "perspective")
-    if view not in ("perspective", "top_down"):
-        raise ValueError(
-            f"camera_config.camera_view_type: expected 'perspective' or 'top_down', got {view!r}"
-        )
-    scale = float(cfg.get("camera_auto_scale", 1.0))
-    size = max(max(extent[0], extent[1]), 1.0)
-    distance = size * scale / (2.0 * math.tan(math.radians(30.0))) + 1.0
-    pitch = -89.9 if view == "top_down" else -45.0
-    return distance, 0.0, pitch, list(center)
+
+    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+        self._sim = sim
+        self._camera: SceneCamera | None = None
+        self._shown: tuple[float, ...] | None = None
+        self._every = max(1, round(_UPDATE_SECONDS / sim.params.timestep))
+
+    def restart(self) -> None:
+        """Frame the scene afresh at the next update (a reset, a new run)."""
+        self._camera, self._shown = None, None
+
+    def frame(self) -> CameraView:
+        """Frame the window on the scene now; return the view."""
+        fov, aspect = gui_projection(self._sim.client)
+        self._camera = SceneCamera(self._sim, self._sim.params.camera, fov_deg=fov, aspect=aspect)
+        self._shown = None
+        return self._show(self._camera.view())
+
+    def on_post_step(self, step: int, sim_time: float, **_: Any) -> None:
+        """Per step: frame the first time, then update every few steps."""
+        if self._camera is None:
+            self.frame()
+        elif step % self._every == 0:
+            turn = ORBIT_DEGREES_PER_SECOND * sim_time
+            self._show(self._camera.view(turn if self._camera.config.mode == "orbit" else 0.0))
+
+    def _show(self, view: CameraView) -> CameraView:
+        # PyBullet applies a camera reset on its next frame, so it is not read back here.
+        if _flat(view) != self._shown:
+            distance, yaw, pitch, target = view
+            p.resetDebugVisualizerCamera(
+                distance, yaw, pitch, target, physicsClientId=self._sim.client
+            )
+            self._shown = _flat(view)
+        return view
+
+
+def _flat(view: CameraView) -> tuple[float, ...]:
+    return (view[0], view[1], view[2], *view[3])
 
 
 def configure_visualizer(
@@ -123,6 +142,7 @@ class GuiApi:
     client: int
     is_gui: bool
     state: KinematicState
+    _gui_camera: GuiCamera | None = None
 
     def setup_pybullet(self) -> None:
         """Hide the GUI side panels (no-op headless)."""
@@ -156,24 +176,50 @@ class GuiApi:
         self,
         camera_config: dict[str, Any] | None = None,
         entity_positions: Sequence[Sequence[float]] | None = None,
-    ) -> tuple[float, float, float, list[float]]:
-        """Frame the camera on the scene or ``entity_positions``.
+    ) -> CameraView:
+        """Frame the camera on the scene (per ``camera_config``) or on ``entity_positions``.
+
+        Args:
+            camera_config: A ``camera_config`` mapping (default: ``params.camera_config``).
+            entity_positions: Frame these points instead of the scene.
 
         Returns:
             (distance, yaw, pitch, target) of the view.
 
+        Raises:
+            ValueError: for a bad ``camera_config``, or ``follow:NAME`` with no such body.
+
         The view is computed headless too (recorders use it); it is applied only with a GUI.
         """
-        if entity_positions is not None:
-            center, extent = scene_bounds(np.asarray(entity_positions, dtype=float).reshape(-1, 3))
-        else:
-            center, extent = self.compute_scene_bounds()
-        view = camera_view(
-            camera_config if camera_config is not None else self.params.camera_config,
-            center,
-            extent,
+        config = (
+            self.params.camera
+            if camera_config is None
+            else parse_camera_config(camera_config, "setup_camera camera_config")
         )
+        fov, aspect = gui_projection(self.client) if self.is_gui else (DEFAULT_FOV_DEG, 4 / 3)
+        if entity_positions is not None and config.mode != "manual":
+            points = np.asarray(entity_positions, dtype=float).reshape(-1, 3)
+            view = box_view(points.min(axis=0), points.max(axis=0), config, fov, aspect)
+        else:
+            sim = cast("MultiRobotSimulationCore", self)
+            view = SceneCamera(sim, config, fov_deg=fov, aspect=aspect).view()
         if self.is_gui:
             distance, yaw, pitch, target = view
             p.resetDebugVisualizerCamera(distance, yaw, pitch, target, physicsClientId=self.client)
         return view
+
+    def _start_gui_camera(self) -> None:
+        """With a GUI: frame the window on the scene at the first step and keep it framed."""
+        if self.is_gui and self._gui_camera is None:
+            sim = cast("MultiRobotSimulationCore", self)
+            self._gui_camera = GuiCamera(sim)
+            # A high number runs late: the camera frames what the other handlers did.
+            sim.events.on(SimEvents.POST_STEP, self._gui_camera.on_post_step, priority=300)
+
+    def _frame_gui_camera(self, *, restart: bool = False) -> None:
+        """Frame the GUI window now (a run starts) or at the next step (``restart``)."""
+        if self._gui_camera is not None:
+            if restart:
+                self._gui_camera.restart()
+            else:
+                self._gui_camera.frame()

@@ -37,7 +37,14 @@ import numpy as np
 import pybullet as p
 
 from fleet_async.core.base.events import EventBus, SimEvents
-from fleet_async.core.view import gui
+from fleet_async.core.sim.camera_config import CAMERA_MODES as CONFIG_CAMERA_MODES
+from fleet_async.core.view.camera import (
+    DEFAULT_FOV_DEG,
+    CameraSim,
+    CameraView,
+    SceneCamera,
+    parse_camera_params,
+)
 from fleet_async.core.view.video_writers import WRITERS as _WRITERS
 
 if TYPE_CHECKING:
@@ -47,22 +54,19 @@ __all__ = ["CAMERA_MODES", "TIME_BASES", "RecordableSim", "RecordingApi", "Simul
 
 logger = logging.getLogger(__name__)
 
-CAMERA_MODES = ("auto", "gui", "orbit", "manual")
+CAMERA_MODES = ("auto", "gui", *CONFIG_CAMERA_MODES[1:])
+"""Recorder camera modes: ``auto`` (the simulation's ``camera_config``; the GUI's camera when
+there is a GUI), ``gui`` and the ``camera_config`` modes (``sim/camera_config.py``)."""
 TIME_BASES = ("sim", "real")
-CAMERA_PARAM_KEYS = ("distance", "yaw", "pitch", "target")
 GIF_MAX_FPS = 50
 """GIF delays are whole 1/100 s and players slow down delays under 2/100 s."""
 ORBIT_FRAMES_WITHOUT_DURATION = 360
 """Without a duration, an orbit turns ``orbit_degrees`` every this many frames."""
 
-_FOV_DEG = 60.0  # matches the 30-degree half angle gui.camera_view frames the scene for
 _EPS = 1e-9  # absorbs float error in products such as 3 * 0.1 * 10
 
-CameraView = tuple[float, float, float, list[float]]
-"""(distance m, yaw deg, pitch deg, target [x, y, z] m) of a camera orbiting its target."""
 
-
-class RecordableSim(Protocol):
+class RecordableSim(CameraSim, Protocol):
     """What a recorder needs from the simulation."""
 
     @property
@@ -74,7 +78,6 @@ class RecordableSim(Protocol):
     @property
     def events(self) -> EventBus: ...
     def sync_pybullet(self) -> int: ...
-    def compute_scene_bounds(self) -> tuple[list[float], list[float]]: ...
 
 
 # ----- argument checks ---------------------------------------------------------------------
@@ -88,40 +91,6 @@ def _positive_int(name: str, value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) <= 0:
         raise ValueError(f"recording {name}: expected a positive integer, got {value!r}")
     return int(value)
-
-
-def _parse_camera_params(params: Any) -> dict[str, Any]:
-    """Check ``camera_params`` of the manual camera; return a copy."""
-    if not isinstance(params, dict):
-        raise ValueError(
-            f"recording camera_params: expected a dict with keys {list(CAMERA_PARAM_KEYS)}, "
-            f"got {params!r}"
-        )
-    unknown = sorted(set(params) - set(CAMERA_PARAM_KEYS))
-    if unknown:
-        raise ValueError(
-            f"recording camera_params: unknown key(s) {unknown}; "
-            f"valid keys are {list(CAMERA_PARAM_KEYS)}"
-        )
-    for key in ("distance", "yaw", "pitch"):
-        if key in params and not _is_number(params[key]):
-            raise ValueError(
-                f"recording camera_params.{key}: expected a number, got {params[key]!r}"
-            )
-    distance = params.get("distance", 1.0)
-    if distance <= 0:
-        raise ValueError(
-            f"recording camera_params.distance: expected a number > 0 (m), got {distance!r}"
-        )
-    if "target" in params:
-        target = params["target"]
-        if not (
-            isinstance(target, (list, tuple)) and len(target) == 3 and all(map(_is_number, target))
-        ):
-            raise ValueError(
-                f"recording camera_params.target: expected [x, y, z] (m), got {target!r}"
-            )
-    return dict(params)
 
 
 # ----- the recorder ------------------------------------------------------------------------
@@ -138,10 +107,13 @@ class SimulationRecorder:
         fps: Frames per second of the recording, for capture and playback (<= 50 for GIF).
         duration: Length of the recording: sim seconds (``time_base="sim"``) or wall seconds
             (``"real"``); None records until :meth:`stop`.
-        camera_mode: ``"auto"`` frames the scene as it is at :meth:`start`
-            (``sim.compute_scene_bounds`` with ``params.camera_config``), and becomes ``"gui"``
-            when the simulation has a GUI; ``"gui"`` follows the GUI's camera; ``"orbit"`` is
-            the auto view with the yaw turning; ``"manual"`` uses ``camera_params``.
+        camera_mode: ``"auto"`` uses the simulation's ``camera_config`` (by default: every
+            body's extent seen so far in the run, so the view widens when a robot drives out
+            of it), and becomes ``"gui"`` when the simulation has a GUI; ``"gui"`` follows the
+            GUI's camera; ``"top_down"``, ``"orbit"`` (the auto view with the yaw turning),
+            ``"fleet"`` (the agents' extent now) and ``"follow:NAME"`` are
+            ``camera_config``'s modes with its other keys (``sim/camera_config.py``);
+            ``"manual"`` uses ``camera_params``.
         time_base: ``"sim"`` or ``"real"``: the clock ``fps`` and ``duration`` refer to.
         orbit_degrees: ``"orbit"`` only: degrees the camera turns over ``duration``, or every
             :data:`ORBIT_FRAMES_WITHOUT_DURATION` frames when there is no duration
@@ -192,10 +164,11 @@ class SimulationRecorder:
         )
         self._camera_mode = self._resolve_camera_mode(camera_mode, orbit_degrees, camera_params)
         self._orbit_degrees = 360.0 if orbit_degrees is None else float(orbit_degrees)
-        self._camera_params = {} if camera_params is None else _parse_camera_params(camera_params)
+        self._camera_params = {} if camera_params is None else parse_camera_params(camera_params)
+        self._camera = self._make_camera(camera_mode)
         self._clock = clock
         self._writer = _WRITERS[self._path.suffix.lower()](self._path, self._fps)
-        self._view: CameraView | None = None
+        self._manual_view: CameraView | None = None
         self._recording = False
         self._stopped = False
         self._slots = 0  # slots written so far
@@ -220,8 +193,13 @@ class SimulationRecorder:
                     raise ValueError(f"recording {name}: H.264 MP4 needs an even size, got {value}")
 
     def _resolve_camera_mode(self, mode: Any, orbit_degrees: Any, camera_params: Any) -> str:
-        if mode not in CAMERA_MODES:
-            raise ValueError(f"recording camera_mode: expected one of {CAMERA_MODES}, got {mode!r}")
+        if not isinstance(mode, str) or not (
+            mode in CAMERA_MODES or (mode.startswith("follow:") and mode[7:].strip())
+        ):
+            raise ValueError(
+                f"recording camera_mode: expected one of {CAMERA_MODES} "
+                f"(follow:NAME names a body), got {mode!r}"
+            )
         if orbit_degrees is not None:
             if mode != "orbit":
                 raise ValueError(
@@ -243,6 +221,24 @@ class SimulationRecorder:
                 "recording camera_mode: 'gui' needs a GUI, but the simulation has none"
             )
         return str(mode)
+
+    def _make_camera(self, requested: str) -> SceneCamera | None:
+        """The recording's scene camera: ``camera_config``'s, with the requested mode."""
+        if self._camera_mode == "gui":
+            return None
+        config = self._sim.params.camera
+        where = "SimulationParams.camera_config"
+        if requested == "manual":  # camera_params over the auto view
+            config, where = config.with_mode("auto", "recording camera_mode"), "recording"
+        elif requested != "auto":
+            config, where = config.with_mode(requested, "recording camera_mode"), "recording"
+        return SceneCamera(
+            self._sim,
+            config,
+            fov_deg=DEFAULT_FOV_DEG,
+            aspect=self._width / self._height,
+            where=f"{where} camera_mode",
+        )
 
     # ----- read-only state ------------------------------------------------------------------
 
@@ -284,34 +280,38 @@ class SimulationRecorder:
     # ----- camera and frames ----------------------------------------------------------------
 
     def camera_view(self, frame_index: int = 0) -> CameraView:
-        """(distance m, yaw deg, pitch deg, target m) of the camera for frame ``frame_index``."""
-        if self._camera_mode == "gui":
+        """(distance m, yaw deg, pitch deg, target m) of the camera for frame ``frame_index``.
+
+        Framed modes widen with what they have seen so far, so each call may widen the view.
+        """
+        if self._camera is None:  # "gui": whatever the window shows
             cam = p.getDebugVisualizerCamera(physicsClientId=self._sim.client)
             return float(cam[10]), float(cam[8]), float(cam[9]), [float(v) for v in cam[11]]
-        if self._view is None:
-            self._view = self._fixed_view()
-        distance, yaw, pitch, target = self._view
-        if self._camera_mode == "orbit":
+        if self._camera_params:
+            return self._manual(self._camera)
+        turn = 0.0
+        if self._camera.config.mode == "orbit":
             per_frame = (
                 self._orbit_degrees / self._total_slots
                 if self._total_slots is not None
                 else self._orbit_degrees / ORBIT_FRAMES_WITHOUT_DURATION
             )
-            yaw += per_frame * frame_index
-        return distance, yaw, pitch, list(target)
+            turn = per_frame * frame_index
+        return self._camera.view(turn)
 
-    def _fixed_view(self) -> CameraView:
-        center, extent = self._sim.compute_scene_bounds()
-        distance, yaw, pitch, target = gui.camera_view(
-            self._sim.params.camera_config, center, extent
-        )
-        cp = self._camera_params
-        return (
-            float(cp.get("distance", distance)),
-            float(cp.get("yaw", yaw)),
-            float(cp.get("pitch", pitch)),
-            [float(v) for v in cp.get("target", target)],
-        )
+    def _manual(self, camera: SceneCamera) -> CameraView:
+        """``camera_params``, keys left out from the auto view when the recording started."""
+        if self._manual_view is None:
+            distance, yaw, pitch, target = camera.view()
+            cp = self._camera_params
+            self._manual_view = (
+                float(cp.get("distance", distance)),
+                float(cp.get("yaw", yaw)),
+                float(cp.get("pitch", pitch)),
+                [float(v) for v in cp.get("target", target)],
+            )
+        distance, yaw, pitch, target = self._manual_view
+        return distance, yaw, pitch, list(target)
 
     def capture_frame(self, frame_index: int = 0) -> np.ndarray:
         """Render the scene now with frame ``frame_index``'s camera.
@@ -323,7 +323,7 @@ class SimulationRecorder:
         distance, yaw, pitch, target = self.camera_view(frame_index)
         view = p.computeViewMatrixFromYawPitchRoll(target, distance, yaw, pitch, 0.0, 2)
         projection = p.computeProjectionMatrixFOV(
-            _FOV_DEG, self._width / self._height, distance * 0.01, distance * 10.0 + 10.0
+            DEFAULT_FOV_DEG, self._width / self._height, distance * 0.01, distance * 10.0 + 10.0
         )
         _, _, rgba, _, _ = p.getCameraImage(
             self._width,
@@ -348,7 +348,7 @@ class SimulationRecorder:
         if self._recording or self._stopped:
             raise RuntimeError(f"SimulationRecorder({self.output!r}) was already started")
         self._path.parent.mkdir(parents=True, exist_ok=True)
-        self._view = None
+        self._manual_view = None
         self._wall0 = self._clock()
         self._write_slots(1)
         # A high number runs late: the frame shows what other post-step handlers did.
@@ -436,7 +436,8 @@ class RecordingApi:
             fps: Frames per second, for capture and playback.
             duration: Sim seconds (``time_base="sim"``) or wall seconds (``"real"``); None
                 records until :meth:`stop_recording`.
-            camera_mode: ``"auto"``, ``"gui"``, ``"orbit"`` or ``"manual"``.
+            camera_mode: ``"auto"``, ``"gui"``, ``"top_down"``, ``"orbit"``, ``"fleet"``,
+                ``"follow:NAME"`` or ``"manual"``.
             time_base: ``"sim"`` or ``"real"``.
             **kwargs: ``orbit_degrees``, ``camera_params`` or ``clock`` for the recorder.
 

@@ -61,6 +61,11 @@ class PendingBodies:
         body = self._of_row.get(row)
         return -1 if body is None else body.collision_shape
 
+    def visual_shape(self, row: int) -> int:
+        """The visual shape the pending body of ``row`` will have (-1: none, or none pending)."""
+        body = self._of_row.get(row)
+        return -1 if body is None else body.visual_shape
+
     def __len__(self) -> int:
         return len(self._of_row)
 
@@ -183,6 +188,10 @@ class PendingBodiesApi:
     def pending_collision_shape(self, row: int) -> int:
         """The collision shape id of the body ``row`` waits for (-1: no pending body)."""
         return self._pending.collision_shape(row)
+
+    def pending_visual_shape(self, row: int) -> int:
+        """The visual shape id of the body ``row`` waits for (-1: none, or no pending body)."""
+        return self._pending.visual_shape(row)
 
     def sync_body_list(self) -> None:
         """Make PyBullet's client-side body list (``getBodyInfo``, ``getNumBodies``) know every
