@@ -43,8 +43,9 @@ class ScenarioOutcome:
 
     Attributes:
         stopped: Why it stopped: ``"duration"`` (the duration was reached), ``"done"`` (its
-            missions returned and its actions finished) or ``"max_duration"`` (the cap of a
-            run without a duration).
+            missions returned and its actions finished), ``"max_duration"`` (the cap of a run
+            without a duration, whose work was not done) or ``"no_end"`` (the cap of a run
+            without a duration, missions or actions: nothing it could finish).
         limit: The duration or cap that applied, in sim seconds.
         results: What each mission returned, by mission name (missions that did not return
             are absent).
@@ -60,6 +61,11 @@ class ScenarioOutcome:
             return "its work is done (missions returned, robots finished their actions)"
         if self.stopped == "duration":
             return f"the duration of {self.limit:g} s was reached"
+        if self.stopped == "no_end":
+            return (
+                f"the scenario has no missions, no actions and no duration, so nothing to "
+                f"finish: it ran the {self.limit:g} s cap (give a duration)"
+            )
         return (
             f"the scenario sets no duration and its work was not done after {self.limit:g} s "
             "(the cap; give a duration to run longer)"
@@ -131,5 +137,10 @@ def run_scenario(
 
     start = sim.sim_time
     run(sim, scenario, until=start + limit, backend=backend, watchdog=watchdog)
-    stopped = "done" if finished else "duration" if duration is not None else "max_duration"
+    if finished:
+        stopped = "done"
+    elif duration is not None:
+        stopped = "duration"
+    else:
+        stopped = "max_duration" if ends_by_itself else "no_end"
     return ScenarioOutcome(stopped, limit, results)

@@ -330,7 +330,7 @@ def test_run_without_a_duration_or_work_stops_at_the_cap(script, tmp_path):
     assert result.returncode == 0, result.stderr
     summary = summary_of(result.stdout)
     assert (summary["sim time"], summary["steps"]) == ("600.000 s", "1200")
-    assert "sets no duration" in result.stdout
+    assert "no missions, no actions and no duration" in result.stdout
 
 
 def test_load_scenario_is_unpaced_headless_unless_asked(tmp_path, monkeypatch):

@@ -161,8 +161,8 @@ def test_the_scenario_duration_applies_when_none_is_given(scenario_dir):
 def test_without_work_a_run_stops_at_the_cap(scenario_dir):
     with load(scenario_dir, "") as sim:
         outcome = run_scenario(sim, max_duration=4.0)
-        assert (outcome.stopped, sim.step_count) == ("max_duration", 40)
-        assert "sets no duration" in outcome.describe()
+        assert (outcome.stopped, sim.step_count) == ("no_end", 40)
+        assert "no missions, no actions and no duration" in outcome.describe()
 
 
 def test_unfinished_work_stops_at_the_cap(scenario_dir):

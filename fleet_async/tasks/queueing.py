@@ -113,9 +113,13 @@ class PutRequest(_Request):
 
     __slots__ = ()
 
-    def __init__(self, owner: Queueing, what: str) -> None:
+    def __init__(self, owner: Queueing, what: str, give_back: bool = False) -> None:
         super().__init__(owner, what)
-        owner.add_put(self)
+        if give_back:  # what a cancelled get took: first in line, owned by no mission
+            self.mission = None
+            owner.put_queue.insert(0, self)
+        else:
+            owner.add_put(self)
         self.callbacks.append(owner.serve_gets)  # type: ignore[union-attr]  # a fresh event
         owner.serve_puts()
 

@@ -264,11 +264,11 @@ class ContainerPut(PutRequest):
 
     __slots__ = ("amount",)
 
-    def __init__(self, container: Container, amount: float) -> None:
+    def __init__(self, container: Container, amount: float, give_back: bool = False) -> None:
         if not amount > 0:
             raise ValueError(f"Container.put: amount must be > 0, got {amount!r}")
         self.amount = amount
-        super().__init__(container, "Container.put")
+        super().__init__(container, "Container.put", give_back)
 
 
 class ContainerGet(GetRequest):
@@ -322,12 +322,9 @@ class Container(Queueing):
         return False
 
     def restore(self, request: ContainerGet) -> None:  # type: ignore[override]  # its own gets
-        """Give back the amount a cancelled get took: a put first in line (it waits for room,
-        so the level never exceeds the capacity)."""
-        give_back = ContainerPut(self, request.amount)
-        if not give_back.triggered:
-            self.put_queue.remove(give_back)
-            self.put_queue.insert(0, give_back)
+        """Give back the amount a cancelled get took: a put first in line, served before any
+        other (it waits for room if others filled the container meanwhile)."""
+        ContainerPut(self, request.amount, give_back=True)
 
     def try_get(self, request: ContainerGet) -> bool:
         """Take the amount if there is that much; go on only if it did."""

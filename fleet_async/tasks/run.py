@@ -225,8 +225,11 @@ class _Driver:
         rtf = sim.params.target_rtf
         if gap is not None and rtf > 0:  # paced: jump no further than the outside world waits
             gap = min(gap, max(1, int(_YIELD_EVERY * rtf / sim.params.timestep)))
-        skippable = gap is not None and gap > 0 and not runtime.watches_predicates()
-        if skippable and sim.skip_idle_steps(gap):
+        if gap is not None and gap > 0 and not runtime.watches_predicates():
+            skipped = sim.skip_idle_steps(gap)
+        else:
+            skipped = 0
+        if skipped:
             kernel.now = sim.step_count
             return
         runtime.step()

@@ -26,9 +26,9 @@ class StorePut(PutRequest):
 
     __slots__ = ("item",)
 
-    def __init__(self, store: Store, item: Any) -> None:
+    def __init__(self, store: Store, item: Any, give_back: bool = False) -> None:
         self.item = item
-        super().__init__(store, "Store.put")
+        super().__init__(store, "Store.put", give_back)
 
 
 class StoreGet(GetRequest):
@@ -82,12 +82,9 @@ class Store(Queueing):
         return request.filter is not None
 
     def restore(self, request: StoreGet) -> None:  # type: ignore[override]  # its own gets
-        """Give back the item a cancelled get took: a put first in line (it waits for room,
-        so the store never holds more than its capacity)."""
-        give_back = StorePut(self, request.raw_value)
-        if not give_back.triggered:
-            self.put_queue.remove(give_back)
-            self.put_queue.insert(0, give_back)
+        """Give back the item a cancelled get took: a put first in line, served before any
+        other (it waits for room if others filled the store meanwhile: never over capacity)."""
+        StorePut(self, request.raw_value, give_back=True)
 
     def _add(self, item: Any) -> None:
         self.items.append(item)

@@ -31,9 +31,10 @@ Op = tuple[Any, ...]
 
 N_EVENTS = 3
 INTERRUPTIBLE = frozenset({"sleep", "wait", "use", "hold", "join"})
-"""States in which the SimPy-comparable programs may be interrupted (SimPy loses an item
-that a served store get had taken when the getter is interrupted; fleet_async gives it back,
-so those states are left to the fleet_async-only programs)."""
+"""States in which the SimPy-comparable programs may be interrupted, and only once until the
+interrupt is caught (SimPy leaves an interrupted getter's request queued, and loses an item a
+served get had taken; fleet_async withdraws the request and gives the item back, so those
+states are left to the fleet_async-only programs)."""
 
 
 @dataclass
@@ -113,6 +114,7 @@ class _World:
     handles: dict[str, Any] = field(default_factory=dict)
     state: dict[str, str] = field(default_factory=dict)
     started: set[str] = field(default_factory=set)
+    pending: set[str] = field(default_factory=set)  # interrupted, not yet caught
 
     def __post_init__(self) -> None:
         sim, program = self.sim, self.program
@@ -134,6 +136,7 @@ async def _fa_script(w: _World, name: str, ops: list[Op]) -> str:
         try:
             await _fa_op(w, name, i, op)
         except fa.Interrupt as interrupt:
+            w.pending.discard(name)
             w.note(name, i, "interrupted", interrupt.cause)
         w.state[name] = "run"
     w.note(name, "end")
@@ -210,9 +213,12 @@ async def _fa_op(w: _World, name: str, i: int, op: Op) -> None:
             and handle.is_alive
             and target != name
             and target in w.started
-            and (w.program.full or w.state.get(target) in INTERRUPTIBLE)
+            and (
+                w.program.full or (w.state.get(target) in INTERRUPTIBLE and target not in w.pending)
+            )
         )
         if ok:
+            w.pending.add(target)
             handle.interrupt(name)
         w.note(name, i, "interrupt", target, ok)
     else:
@@ -264,6 +270,7 @@ async def _fa_nested(w: _World, name: str, i: int, ops: list[Op]) -> None:
         try:
             await _fa_op(w, name, i * 100 + j, op)
         except fa.Interrupt as interrupt:
+            w.pending.discard(name)
             w.note(name, i * 100 + j, "interrupted", interrupt.cause)
         w.state[name] = "run"
 
@@ -290,7 +297,10 @@ def run_fleet(sim: Any, program: Program, backend: str) -> tuple[list[tuple[Any,
         assert resource.count == 0, f"resource {n} still has users {resource.users}"
         assert not resource.queue, f"resource {n} still has requests queued"
     for n, queueing in enumerate([*w.stores, w.tank]):
-        assert not queueing.put_queue and not queueing.get_queue, f"requests left in {n}"
+        assert not queueing.get_queue, f"get requests left in {n}"
+        # Only give-backs (what a cancelled get had taken, owned by no mission) may still wait
+        # for room: nobody took from the store again after them.
+        assert all(r.mission is None for r in queueing.put_queue), f"put requests left in {n}"
     return w.log, outcome
 
 
@@ -311,6 +321,7 @@ class _SimPyWorld:
     handles: dict[str, Any] = field(default_factory=dict)
     state: dict[str, str] = field(default_factory=dict)
     started: set[str] = field(default_factory=set)
+    pending: set[str] = field(default_factory=set)  # interrupted, not yet caught
 
     def __post_init__(self) -> None:
         env, program = self.env, self.program
@@ -330,6 +341,7 @@ def _sp_script(w: _SimPyWorld, name: str, ops: list[Op]) -> Any:
         try:
             yield from _sp_op(w, name, i, op)
         except simpy.Interrupt as interrupt:
+            w.pending.discard(name)
             w.note(name, i, "interrupted", interrupt.cause)
         w.state[name] = "run"
     w.note(name, "end")
@@ -404,8 +416,10 @@ def _sp_op(w: _SimPyWorld, name: str, i: int, op: Op) -> Any:
             and target != name
             and target in w.started
             and w.state.get(target) in INTERRUPTIBLE
+            and target not in w.pending
         )
         if ok:
+            w.pending.add(target)
             handle.interrupt(name)
         w.note(name, i, "interrupt", target, ok)
     else:  # pragma: no cover
