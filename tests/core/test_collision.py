@@ -471,3 +471,20 @@ def test_swept_box_distance_decision_matches_a_fine_scan():
     for margin in (0.02, 0.1, 0.3):
         clear = np.abs(least - margin) > 3e-4  # rows the scan itself resolves
         assert (_within(rel0, move, half, margin) == (least <= margin))[clear].all()
+
+
+def test_reading_aabbs_between_a_removal_and_the_check_still_ends_its_contacts():
+    # A camera (recorder, GUI) reads the AABBs after every frame: that must not swallow the
+    # news that an object left, for the next check or for idle_steps.
+    with make_sim() as sim:
+        a, b = cube(sim, 0.0), cube(sim, 0.15)
+        sim.step_once()
+        assert sim.get_active_collision_pairs() == [(a.object_id, b.object_id)]
+        ended = []
+        sim.events.on(SimEvents.COLLISION_ENDED, lambda obj_a, obj_b, **_: ended.append(1))
+        sim.remove_object(b)
+        assert sim.get_aabb_bounds() is not None  # what a camera does
+        assert sim.idle_steps(5) == 0  # a check has news
+        sim.step_once()
+        assert sim.get_active_collision_pairs() == [] and ended == [1]
+        assert sim.idle_steps(5) == 5

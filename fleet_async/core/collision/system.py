@@ -91,7 +91,9 @@ class CollisionSystem:
         self._static: np.ndarray | None = None  # STATIC mask over rows, None if none
         self._plain = False  # no STATIC, no articulated rows: whole-array AABB refresh allowed
         self._start = np.zeros((0, 3))  # row positions at the previous check (sweep)
-        self._relaid = False  # the last _prepare saw rows added, removed or changing mode
+        # Rows were added, removed or changed mode since the last check. Kept until a check
+        # has run: reading AABBs in between (a camera) relays the rows out, not the check.
+        self._relaid = False
 
     @property
     def registrations(self) -> int:
@@ -139,8 +141,10 @@ class CollisionSystem:
         if self.frequency == 0:
             return limit
         store = self._sim.state
-        if store.layout_version == self._layout and not np.count_nonzero(
-            store.moved[: store.high_water]
+        if (
+            store.layout_version == self._layout
+            and not self._relaid
+            and not np.count_nonzero(store.moved[: store.high_water])
         ):
             return limit
         if self.frequency is None:
@@ -166,6 +170,7 @@ class CollisionSystem:
         self._colors.clear()
         self._next_due_step = 0
         self._layout = -1
+        self._relaid = False
         if self.cell_mode is not SpatialHashCellSizeMode.CONSTANT:
             self.cell_size = None
 
@@ -180,9 +185,9 @@ class CollisionSystem:
         """Register new / changed rows and refresh moved ones; return the moved rows."""
         store = self._sim.state
         high = store.high_water
-        self._relaid = store.layout_version != self._layout
-        if self._relaid:
+        if store.layout_version != self._layout:
             self._relayout()
+            self._relaid = True
         flags = store.moved[:high]
         moved = flags.nonzero()[0] if np.count_nonzero(flags) else _NO_ROWS
         # Most rows moved and none is special: one pass over every row beats gathers.
@@ -322,6 +327,7 @@ class CollisionSystem:
         elif self._relaid and len(self._active):
             self._finish(_NO_PAIRS, moved_rows, None, True)  # contacts of removed objects end
         # else nothing moved and nobody left: no pair can have started or ended
+        self._relaid = False
 
     def check(
         self, ignore_static: bool | None = None, collision_color: list[float] | None = None
@@ -343,6 +349,7 @@ class CollisionSystem:
             checked = True
         t1 = time.perf_counter()
         events_ms = self._finish(row_pairs, moved_rows, collision_color, checked)
+        self._relaid = False
         timings["contact_points"] = (time.perf_counter() - t1) * 1e3 - events_ms
         timings["events"] = events_ms
         timings["total"] = (time.perf_counter() - t0) * 1e3
