@@ -12,6 +12,7 @@ so a mission that gives up waiting (a timeout, an interrupt) leaves nothing behi
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from types import TracebackType
 from typing import Any
 
@@ -55,31 +56,25 @@ class Queueing:
 
     def serve_puts(self, _: SimEvent | None = None) -> None:
         """Serve waiting puts in queue order (a get was processed, or a put was made)."""
-        queue = self.put_queue
-        i = 0
-        while i < len(queue):
-            request = queue[i]
-            proceed = self.try_put(request)
-            if request.triggered:
-                del queue[i]
-            else:
-                i += 1
-            if not proceed:
-                break
+        _serve(self.put_queue, self.try_put)
 
     def serve_gets(self, _: SimEvent | None = None) -> None:
         """Serve waiting gets in queue order (a put was processed, or a get was made)."""
-        queue = self.get_queue
-        i = 0
-        while i < len(queue):
-            request = queue[i]
-            proceed = self.try_get(request)
-            if request.triggered:
-                del queue[i]
-            else:
-                i += 1
-            if not proceed:
-                break
+        _serve(self.get_queue, self.try_get)
+
+
+def _serve(queue: list[Any], try_one: Callable[[Any], bool]) -> None:
+    """Try the requests of ``queue`` in order, dropping those served, until one says stop."""
+    i = 0
+    while i < len(queue):
+        request = queue[i]
+        proceed = try_one(request)
+        if request.triggered:
+            del queue[i]
+        else:
+            i += 1
+        if not proceed:
+            break
 
 
 class _Request(SimEvent):
