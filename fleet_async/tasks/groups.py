@@ -187,9 +187,25 @@ class TaskGroup:
 
 
 def lone_error(exc: BaseException) -> BaseException:
-    """``exc`` without the exception groups that wrap it alone."""
+    """``exc`` without the exception groups that wrap it alone.
+
+    Notes on the groups move to the error (a task group's body that raises fails its
+    mission with the group, which gets the "in mission ..." note), except a mission note
+    when the error already names the mission it failed in.
+    """
+    notes: list[str] = []
     while isinstance(exc, BaseExceptionGroup) and len(exc.exceptions) == 1:
+        notes += getattr(exc, "__notes__", ())
         exc = exc.exceptions[0]
+    if notes and hasattr(exc, "add_note"):
+        have = list(getattr(exc, "__notes__", ()))
+        named = any(note.startswith("in mission ") for note in have)
+        for note in notes:
+            if note in have or (named and note.startswith("in mission ")):
+                continue
+            exc.add_note(note)
+            have.append(note)
+            named = named or note.startswith("in mission ")
     return exc
 
 

@@ -170,8 +170,22 @@ def test_a_lone_mission_error_is_raised_as_itself(backend):
             async with sim.task_group() as tg:
                 tg.start_soon(child, name="child")
 
-        with pytest.raises(ValueError, match="child failed"):
+        with pytest.raises(ValueError, match="child failed") as caught:
             fa.run(sim, parent, backend=backend)
+        assert getattr(caught.value, "__notes__", []) == [
+            "in mission 'child' at sim time 0.500 s"
+        ]
+
+        async def body_fails():  # the task group's own body raises: the group fails the mission
+            async with sim.task_group():
+                await sim.sleep(0.1)
+                raise KeyError("body")
+
+        with pytest.raises(KeyError) as caught_key:
+            fa.run(sim, body_fails, backend=backend)
+        assert getattr(caught_key.value, "__notes__", []) == [
+            "in mission 'body_fails' at sim time 0.600 s"
+        ]
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
