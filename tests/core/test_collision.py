@@ -305,6 +305,32 @@ def test_broad_phase_matches_brute_force_on_random_scenes(seed):
     assert [tuple(x) for x in kept.tolist()] == _brute_force(amin, amax, flat, moved)
 
 
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("side_by_side", [False, True])
+def test_broad_phase_two_cell_objects_match_brute_force(seed, side_by_side):
+    # Objects smaller than a cell, many across a cell edge (at most two cells per axis): the
+    # path that enters each object's 1-8 cells in one go; crowded, so cells hold 3+ entries.
+    rng = np.random.default_rng(200 + seed)
+    n = [40, 150, 600][seed % 3]
+    center = rng.uniform(-3, 3, (n, 3)) * [1, 1, 0.1]
+    size = rng.uniform(0.02, 0.25, (n, 3))
+    amin, amax = center - size, center + size
+    flat = np.zeros(n, dtype=bool)
+    moved = rng.random(n) < 0.5
+    bounds = np.stack([amin, amax], axis=1) if side_by_side else None
+    idx = candidate_pairs(amin, amax, None, moved, 0.6, 1.5, bounds)
+    spans = np.floor(amax / 0.6) - np.floor(amin / 0.6)
+    assert spans.max() == 1  # the scene exercises the two-cell path
+    assert len(np.unique(idx, axis=0)) == len(idx)
+    assert (idx[:, 0] < idx[:, 1]).all()
+    kept = idx[
+        aabb_overlap(
+            amin[idx[:, 0]], amax[idx[:, 0]], amin[idx[:, 1]], amax[idx[:, 1]], flat[idx[:, 0]]
+        )
+    ]
+    assert [tuple(x) for x in kept.tolist()] == _brute_force(amin, amax, flat, moved)
+
+
 def test_simulated_scene_matches_brute_force_narrow_phase():
     rng = np.random.default_rng(7)
     with make_sim(collision_margin=0.02) as sim:

@@ -24,6 +24,7 @@ _WEIGHTS = np.array([1 << (2 * _BITS), 1 << _BITS, 1], dtype=np.int64)
 # Fibonacci hashing: multiply by 2**64 / golden ratio, keep the top bits.
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _EMPTY = np.empty((0, 2), dtype=np.int64)
+_NEXT = np.array([0, 1])  # an entry and the next one
 # Up to this many entries a sort finds equal keys faster than the hash table (measured).
 _SORT_MAX = 6000
 
@@ -57,6 +58,7 @@ def candidate_pairs(
     moved: np.ndarray,
     cell_size: float,
     multi_cell_threshold: float,
+    bounds: np.ndarray | None = None,
 ) -> np.ndarray:
     """Index pairs (i < j) whose AABBs share a hash cell and where i or j moved.
 
@@ -69,6 +71,8 @@ def candidate_pairs(
         cell_size: Edge of a hash cell, metres.
         multi_cell_threshold: Objects spanning more cells than this along an axis are
             tested against everything instead of being hashed.
+        bounds: (N, 2, 3) minima and maxima side by side, when the caller holds them so
+            (``aabb_min`` / ``aabb_max`` are then its views): one numpy call floors both.
 
     Returns:
         (K, 2) int64 array of unique pairs in ascending order, ``i < j`` in each.
@@ -77,20 +81,28 @@ def candidate_pairs(
     if n < 2 or not np.count_nonzero(moved):
         return _EMPTY
     inv = 1.0 / cell_size
-    lo = np.floor(aabb_min * inv).astype(np.int64)
-    span = np.floor(aabb_max * inv).astype(np.int64) - lo  # cells spanned - 1, per axis
-    if flat is None and not np.count_nonzero(span):  # common case: every object in one cell
-        return _sorted_unique(_shared_cell_pairs(lo @ _WEIGHTS, None, moved), n, False)
-    if flat is not None:
+    if bounds is not None:
+        cells = np.floor(bounds * inv).astype(np.int64)
+        lo = cells[:, 0]
+        span = cells[:, 1] - lo  # cells spanned - 1, per axis
+    else:
+        lo = np.floor(aabb_min * inv).astype(np.int64)
+        span = np.floor(aabb_max * inv).astype(np.int64) - lo
+    if flat is None:
+        top = int(span.max())
+        if top == 0:  # the common case: every object in one cell
+            return _sorted_unique(_shared_cell_pairs(lo @ _WEIGHTS, None, moved), n, False)
+        if top == 1:  # small objects, some across a cell edge: up to 8 entries each
+            return _sorted_unique(_shared_cell_pairs(*_corner_entries(lo, span), moved), n, True)
+        any_big = top > multi_cell_threshold
+        big = _max3(span) > multi_cell_threshold if any_big else np.zeros(n, dtype=bool)
+    else:
         # A pair with a NORMAL_2D side ignores Z, so those pairs come from a second hash with
         # Z collapsed; pairs of two 3D objects come from the full 3D hash.
         span_xy = span.copy()
         span_xy[:, 2] = 0
         big = _max3(np.where(flat[:, None], span_xy, span)) > multi_cell_threshold
-        any_big = bool(big.any())
-    else:
-        any_big = span.max() > multi_cell_threshold
-        big = _max3(span) > multi_cell_threshold if any_big else np.zeros(n, dtype=bool)
+        any_big = bool(np.count_nonzero(big))
     hashed = ~big & ~flat if flat is not None else (~big if any_big else None)
     pairs = [_shared_cell_pairs(*_entries(lo, span, hashed), moved)]
     if flat is not None:
@@ -172,6 +184,23 @@ def _entries(
     return keys, (which if owner is None else owner[which])
 
 
+# The 8 cells of a 2 x 2 x 2 block as offsets (x, y, z), their key offsets, and for each way an
+# object can span such a block (code 4 * span_x + 2 * span_y + span_z) the cells it covers.
+_CORNERS = np.array([(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.int64)
+_CORNER_KEYS = _CORNERS @ _WEIGHTS
+_SPAN_CODE = np.array([4, 2, 1], dtype=np.int64)
+_COVERS = np.logical_and.reduce(
+    _CORNERS[None, :, :] <= _CORNERS[:, None, :], axis=2
+)  # [code, corner]
+
+
+def _corner_entries(lo: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(cell key, owner) of every hash entry when no object spans more than two cells along
+    an axis: the same entries as :func:`_entries`, in a fixed number of calls."""
+    owner, corner = _COVERS[span @ _SPAN_CODE].nonzero()
+    return (lo @ _WEIGHTS)[owner] + _CORNER_KEYS[corner], owner
+
+
 def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.ndarray) -> np.ndarray:
     """Pairs of entries with equal keys (as owners), each with a moved owner.
 
@@ -181,19 +210,20 @@ def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.nda
     if len(keys) < 2:
         return _EMPTY
     if len(keys) <= _SORT_MAX:
-        entries = np.argsort(keys, kind="stable")
+        entries = keys.argsort(kind="stable")
     else:
         shared = _in_shared_slots(keys)
         if len(shared) < 2:
             return _EMPTY
-        entries = shared[np.argsort(keys[shared], kind="stable")]
+        entries = shared[keys[shared].argsort(kind="stable")]
     k_sorted = keys[entries]
     same = k_sorted[1:] == k_sorted[:-1]
-    if not same.any():
+    if not np.count_nonzero(same):
         return _EMPTY
     first = same.nonzero()[0]
-    if not (same[1:] & same[:-1]).any():  # no cell holds three or more: neighbours pair up
-        a_e, b_e = entries[first], entries[first + 1]
+    if not np.count_nonzero(same[1:] & same[:-1]):
+        # No cell holds three or more: neighbours pair up.
+        at = first[:, None] + _NEXT
     else:
         # Pair every entry with each later entry of its run of equal keys.
         m = len(entries)
@@ -201,12 +231,14 @@ def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.nda
         after = np.repeat(boundary[1:], np.diff(boundary)) - np.arange(m) - 1
         first = np.repeat(np.arange(m), after)
         offset = np.arange(len(first)) - np.repeat(np.cumsum(after) - after, after) + 1
-        a_e, b_e = entries[first], entries[first + offset]
-    # An object's cells are distinct, so a and b are never the same object.
-    a = a_e if owner is None else owner[a_e]
-    b = b_e if owner is None else owner[b_e]
-    keep = moved[a] | moved[b]
-    return _pairs(a[keep], b[keep])
+        at = np.empty((len(first), 2), dtype=np.intp)
+        at[:, 0] = first
+        at[:, 1] = first + offset
+    # (K, 2) positions in the sorted entries -> owners. An object's cells are distinct, so the
+    # two owners of a pair are never the same object.
+    pairs = (entries if owner is None else owner[entries])[at]
+    flags = moved[pairs]
+    return pairs[flags[:, 0] | flags[:, 1]]
 
 
 def _in_shared_slots(keys: np.ndarray) -> np.ndarray:
@@ -232,7 +264,7 @@ def _in_shared_slots(keys: np.ndarray) -> np.ndarray:
             break
         beaten_by = winner[lost]
         same = keys[lost] == keys[beaten_by]
-        if same.any():
+        if np.count_nonzero(same):
             found += [entry[lost[same]], entry[beaten_by[same]]]
         rest = lost[~same]
         entry, keys = entry[rest], keys[rest]

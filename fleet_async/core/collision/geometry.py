@@ -99,10 +99,11 @@ class CollisionGeometry:
         self.exact = np.zeros(0, dtype=bool)
         self.center = np.zeros((0, 3))  # body-frame AABB center offset
         self.half = np.zeros((0, 3))  # body-frame AABB half extents
-        self.lo_off = np.zeros((0, 3))  # center - half - pad: the padded minimum, unrotated
-        self.hi_off = np.zeros((0, 3))
-        self.aabb_min = np.zeros((0, 3))
-        self.aabb_max = np.zeros((0, 3))
+        # Minima and maxima side by side, (rows, 2, 3), so one numpy call covers both; the
+        # *_min / *_max names are views. lo_off / hi_off: center -/+ half -/+ pad, unrotated.
+        self.offsets = np.zeros((0, 2, 3))
+        self.aabb = np.zeros((0, 2, 3))
+        self._views()
         self._shapes: dict[int, _ShapeInfo] = {}
         self.registrations = 0
 
@@ -127,16 +128,20 @@ class CollisionGeometry:
             ("exact", 0, bool, False),
             ("center", 3, float, 0.0),
             ("half", 3, float, 0.0),
-            ("lo_off", 3, float, 0.0),
-            ("hi_off", 3, float, 0.0),
-            ("aabb_min", 3, float, 0.0),
-            ("aabb_max", 3, float, 0.0),
+            ("offsets", (2, 3), float, 0.0),
+            ("aabb", (2, 3), float, 0.0),
         ):
             old = getattr(self, name)
-            new = np.full((cap, width) if width else cap, fill, dtype=dtype)
+            shape = width if isinstance(width, tuple) else (width,) if width else ()
+            new = np.full((cap, *shape), fill, dtype=dtype)
             new[: len(old)] = old
             setattr(self, name, new)
         self._cap = cap
+        self._views()
+
+    def _views(self) -> None:
+        self.lo_off, self.hi_off = self.offsets[:, 0], self.offsets[:, 1]
+        self.aabb_min, self.aabb_max = self.aabb[:, 0], self.aabb[:, 1]
 
     # ----- registration -------------------------------------------------------------------
 
@@ -254,12 +259,12 @@ class CollisionGeometry:
         self.exact[rows] = upright & self.box[rows]  # never set for articulated rows
         if not force:
             keep = self.mode[rows] != _STATIC
-            if not keep.all():
+            if np.count_nonzero(keep) < keep.size:
                 rows, quats, upright = rows[keep], quats[keep], upright[keep]
                 if not len(rows):
                     return
         art = self.articulated[rows]
-        if art.any():
+        if np.count_nonzero(art):
             client = self._client()
             self._sync_rows(rows[art])
             for row in rows[art].tolist():
@@ -269,12 +274,10 @@ class CollisionGeometry:
             rows, quats, upright = rows[~art], quats[~art], upright[~art]
             if not len(rows):
                 return
-        if upright.all():
-            pos = store.position[rows]
-            self.aabb_min[rows] = pos + self.lo_off[rows]
-            self.aabb_max[rows] = pos + self.hi_off[rows]
+        if np.count_nonzero(upright) == upright.size:
+            self.aabb[rows] = store.position[rows, None, :] + self.offsets[rows]
             return
-        if upright.any():
+        if np.count_nonzero(upright):
             r = rows[upright]
             pos = store.position[r]
             self.aabb_min[r] = pos + self.lo_off[r]
@@ -293,11 +296,9 @@ class CollisionGeometry:
         get meaningless AABBs, which nobody reads.
         """
         quats = store.orientation[:high]
-        if np.count_nonzero(quats[:, :3]) or not (quats[:, 3] == 1.0).all():
+        if np.count_nonzero(quats[:, :3]) or np.count_nonzero(quats[:, 3] != 1.0):
             return False
-        pos = store.position[:high]
-        np.add(pos, self.lo_off[:high], out=self.aabb_min[:high])
-        np.add(pos, self.hi_off[:high], out=self.aabb_max[:high])
+        np.add(store.position[:high, None, :], self.offsets[:high], out=self.aabb[:high])
         self.exact[:high] = self.box[:high]
         return True
 

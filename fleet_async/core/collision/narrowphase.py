@@ -84,7 +84,8 @@ class NarrowPhase:
             contact = None
             ok = geo.exact[row_pairs]
             exact = ok[:, 0] & ok[:, 1]
-            if exact.all():  # the common case for box fleets: no PyBullet, no AABB test
+            if np.count_nonzero(exact) == exact.size:
+                # The common case for box fleets: no PyBullet, no AABB test.
                 return self._box_distance(row_pairs, pos) <= self.margin
         else:
             if self.method is CollisionDetectionMethod.CONTACT_POINTS:
@@ -94,7 +95,7 @@ class NarrowPhase:
             ok = geo.exact[row_pairs]
             exact = ok[:, 0] & ok[:, 1] & ~contact
         out = np.zeros(k, dtype=bool)
-        if exact.any():
+        if np.count_nonzero(exact):
             out[exact] = self._box_distance(row_pairs[exact], pos[exact]) <= self.margin
         rest = (~exact).nonzero()[0]
         if positions is None and not aabb_checked:
@@ -133,7 +134,7 @@ class NarrowPhase:
         needs_body = row_pairs[rest[~known]]
         client = self._client()
         if len(needs_body):
-            if (store.body_id[needs_body] == PENDING_BODY).any():
+            if np.count_nonzero(store.body_id[needs_body] == PENDING_BODY):
                 self._create_bodies()
             self._sync_rows(np.unique(needs_body))
         bodies = store.body_id[row_pairs[rest]].tolist()
@@ -202,7 +203,7 @@ class NarrowPhase:
         rel0 = start[b] - start[a]  # b relative to a at the start
         move = (store.position[b] - store.position[a]) - rel0
         boxes = self._unrotated_boxes(row_pairs)
-        if boxes.any():
+        if np.count_nonzero(boxes):
             geo = self._geo
             ab, bb = a[boxes], b[boxes]
             rel = rel0[boxes] + geo.box_center[bb] - geo.box_center[ab]
@@ -210,11 +211,11 @@ class NarrowPhase:
             mv = move[boxes]
             hit = _overlap_in_time(rel, mv, half)  # the boxes overlapped: exact
             near = ~hit & _overlap_in_time(rel, mv, half + self.margin)
-            if near.any():  # within the margin per axis: measure the Euclidean distance
+            if np.count_nonzero(near):  # within the margin per axis: measure the Euclidean distance
                 hit[near] = _within(rel[near], mv[near], half[near], self.margin)
             out[boxes] = hit
         rest = ~boxes
-        if rest.any():
+        if np.count_nonzero(rest):
             # Time of closest approach of the two AABB centres on their straight paths.
             d0, dv = rel0[rest], move[rest]
             speed2 = (dv * dv).sum(axis=1)

@@ -83,7 +83,7 @@ class ActivePairs:
         now_rows = touching_rows
         if len(now_rows):
             now_codes = pair_codes(store.object_id[now_rows])
-            order = np.argsort(now_codes)
+            order = now_codes.argsort()
             now_codes, now_rows = now_codes[order], now_rows[order]
         else:
             now_codes = np.empty(0, dtype=np.int64)
@@ -98,13 +98,13 @@ class ActivePairs:
                 | (ids[ra] != self.codes >> _SHIFT)
                 | (ids[rb] != (self.codes & _LOW))
             )
-            if recheck.any():
+            if np.count_nonzero(recheck):
                 gone = recheck & ~_member(self.codes, now_codes)
-                if gone.any():
+                if np.count_nonzero(gone):
                     ended = self.codes[gone]
                     keep = ~gone
         fresh = ~_member(now_codes, self.codes) if len(now_codes) else None
-        if fresh is None or not fresh.any():
+        if fresh is None or not np.count_nonzero(fresh):
             if keep is not None:
                 self.codes, self.rows = self.codes[keep], self.rows[keep]
             return ended, np.empty(0, dtype=np.int64)
@@ -114,7 +114,7 @@ class ActivePairs:
             codes, rows = codes[keep], rows[keep]
         codes = np.concatenate((codes, started))
         rows = np.concatenate((rows, now_rows[fresh]))
-        order = np.argsort(codes)
+        order = codes.argsort()
         self.codes, self.rows = codes[order], rows[order]
         return ended, started
 
@@ -123,6 +123,6 @@ def _member(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
     """(len(values),) bool: which values are in the ascending array ``sorted_set``."""
     if not len(sorted_set) or not len(values):
         return np.zeros(len(values), dtype=bool)
-    at = np.searchsorted(sorted_set, values)
+    at = sorted_set.searchsorted(values)
     at[at == len(sorted_set)] = 0
     return sorted_set[at] == values

@@ -42,6 +42,7 @@ _STATIC = COLLISION_CODES["static"]
 _DISABLED = COLLISION_CODES["disabled"]
 _FLAT = COLLISION_CODES["normal_2d"]
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)
+_WHOLE_MAX = 1024
 _NO_ROWS = np.empty(0, dtype=np.int64)
 _SWEPT_CELLS = 7.0  # cells an object may span per axis, swept, and still be hashed
 
@@ -190,8 +191,9 @@ class CollisionSystem:
             self._relaid = True
         flags = store.moved[:high]
         moved = flags.nonzero()[0] if np.count_nonzero(flags) else _NO_ROWS
-        # Most rows moved and none is special: one pass over every row beats gathers.
-        whole = self._plain and 4 * len(moved) >= high
+        # Most rows moved, or few rows in all, and none is special: one pass over every row
+        # beats gathers (below _WHOLE_MAX rows a pass costs what a gather does).
+        whole = self._plain and (4 * len(moved) >= high or high <= _WHOLE_MAX)
         if len(moved) and not (whole and self.geometry.refresh_all(high, store)):
             self.geometry.refresh(moved, store)
         return moved
@@ -222,9 +224,9 @@ class CollisionSystem:
         self._all_rows = len(self._rows) == high
         modes = mode[self._rows]
         flat, static = modes == _FLAT, modes == _STATIC
-        self._flat = flat if flat.any() else None
-        self._static = static if static.any() else None
-        self._plain = self._static is None and not geo.articulated[self._rows].any()
+        self._flat = flat if np.count_nonzero(flat) else None
+        self._static = static if np.count_nonzero(static) else None
+        self._plain = self._static is None and not np.count_nonzero(geo.articulated[self._rows])
         self._layout = store.layout_version
 
     def bounds(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
@@ -290,25 +292,23 @@ class CollisionSystem:
         store, geo = self._sim.state, self.geometry
         rows = self._rows
         high = store.high_water
-        if self._all_rows:
-            amin, amax = geo.aabb_min[:high], geo.aabb_max[:high]
-            if moved is None:
-                moved = store.moved[:high]
-        else:
-            amin, amax = geo.aabb_min[rows], geo.aabb_max[rows]
-            if moved is None:
-                moved = store.moved[rows]
+        boxes = geo.aabb[:high] if self._all_rows else geo.aabb[rows]
+        if moved is None:
+            moved = store.moved[:high] if self._all_rows else store.moved[rows]
+        amin, amax = boxes[:, 0], boxes[:, 1]
+        side_by_side: np.ndarray | None = boxes
         threshold = self.multi_cell_threshold
         if sweep:
             shift = self._start[rows] - store.position[rows]
             amin = amin + np.minimum(shift, 0.0)
             amax = amax + np.maximum(shift, 0.0)
+            side_by_side = None  # shifted copies
             # A swept box spans a few more cells than the box: hash it over them rather
             # than test it against every object; only a jump of many cells (a teleport) is
             # tested that way.
             threshold = max(threshold, _SWEPT_CELLS)
         cell = self.resolve_cell_size(rows)
-        idx = candidate_pairs(amin, amax, self._flat, moved, cell, threshold)
+        idx = candidate_pairs(amin, amax, self._flat, moved, cell, threshold, side_by_side)
         if len(idx) and self._static is not None:
             skip_static = self.ignore_static if ignore_static is None else ignore_static
             if skip_static:  # else static-static pairs are checked too, once (they never move)
@@ -366,7 +366,7 @@ class CollisionSystem:
         Return the ms the events took."""
         store = self._sim.state
         touching = self.narrow.touching(row_pairs, store, aabb_checked=aabb_checked)
-        if self.sweep and not touching.all():
+        if self.sweep and np.count_nonzero(touching) < touching.size:
             self._sweep_test(row_pairs, touching)
         ended, started = self._active.update(row_pairs[touching], store)
         if self.sweep:

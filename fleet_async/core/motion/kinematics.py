@@ -49,6 +49,17 @@ from fleet_async.core.motion.segments import (
     trapezoid_duration,
     trapezoid_progress,
 )
+from fleet_async.core.motion.slots import (
+    AT,
+    COLUMNS,
+    IDLE,
+    MOVE_END,
+    POSE,
+    PROFILE_AT,
+    TURN_END,
+    VELOCITY,
+    SlotTable,
+)
 from fleet_async.core.motion.velocity import advance_velocity, body_velocity
 from fleet_async.core.world.state import KinematicState
 
@@ -56,26 +67,7 @@ __all__ = ["KIND_DIFFERENTIAL", "KIND_OMNI", "KinematicEngine"]
 
 KIND_OMNI = 0
 KIND_DIFFERENTIAL = 1
-_IDLE, _VELOCITY, _POSE = 0, 1, 2
 _NONE, _TURNED, _DRIVING = 0, 1, 2  # progress toward the plan's next waypoint
-
-# u: progress along the segment in [0, 1]; steps: steps of the segment taken so far; u_peak:
-# cruise rate of u (1/s); u_t_acc: s spent accelerating (and braking); u_t_end: s the segment
-# takes; theta, sl_*: the rotation and its slerp terms.
-_SCALARS = ("u", "steps", "u_peak", "u_t_acc", "u_t_end", "theta", "sl_dot", "sl_theta", "sl_sin")
-_COLUMNS: dict[str, tuple[tuple[int, ...], type, float]] = {
-    "row": ((), np.int64, -1),
-    "kind": ((), np.int8, 0),
-    "mode": ((), np.int8, _IDLE),
-    **dict.fromkeys(("vmax", "amax", "wmax", "alpha", "p0", "p1", "axis"), ((3,), np.float64, 0.0)),
-    **dict.fromkeys(("q0", "q1", "q_goal"), ((4,), np.float64, 0.0)),
-    **dict.fromkeys(_SCALARS, ((), np.float64, 0.0)),
-    "lin_scalar": ((), np.bool_, True),
-    "ang_scalar": ((), np.bool_, True),
-    "cmd": ((4,), np.float64, 0.0),  # body-frame vx, vy, vz, wz
-    "vel": ((4,), np.float64, 0.0),  # current body-frame velocity in VELOCITY mode
-}
-"""Per-slot columns of the engine: name -> (shape of one slot's entry, dtype, fill value)."""
 
 
 @dataclass
@@ -89,7 +81,7 @@ class _Plan:
     aligned: bool = False
 
 
-class KinematicEngine:
+class KinematicEngine(SlotTable):
     """Moves every slot's row of the state store by its path or velocity command.
 
     Args:
@@ -98,52 +90,19 @@ class KinematicEngine:
             finished its path, False when stopped or replaced.
     """
 
-    # Per-slot columns, grown together by _alloc (shapes and dtypes in _COLUMNS).
-    row: np.ndarray
-    kind: np.ndarray
-    mode: np.ndarray
-    vmax: np.ndarray
-    amax: np.ndarray
-    wmax: np.ndarray
-    alpha: np.ndarray
-    p0: np.ndarray
-    p1: np.ndarray
-    axis: np.ndarray
-    q0: np.ndarray
-    q1: np.ndarray
-    q_goal: np.ndarray
-    u: np.ndarray
-    steps: np.ndarray
-    u_peak: np.ndarray
-    u_t_acc: np.ndarray
-    u_t_end: np.ndarray
-    theta: np.ndarray
-    sl_dot: np.ndarray
-    sl_theta: np.ndarray
-    sl_sin: np.ndarray
-    lin_scalar: np.ndarray
-    ang_scalar: np.ndarray
-    cmd: np.ndarray
-    vel: np.ndarray
-
     def __init__(self, store: KinematicState, on_motion_end: Callable[[int, bool], None]) -> None:
         self._store = store
         self._on_motion_end = on_motion_end
         self._free: list[int] = []
-        self._high = 0
         self._stopped: list[int] = []  # slots that arrived last step: zero their velocity next
         self._plans: list[_Plan | None] = []
+        super().__init__()
         self._alloc(16)
 
     # ----- slots --------------------------------------------------------------------------
 
     def _alloc(self, cap: int) -> None:
-        for name, (shape, dtype, fill) in _COLUMNS.items():
-            new: np.ndarray = np.full((cap, *shape), fill, dtype=dtype)
-            old = getattr(self, name, None)
-            if old is not None:
-                new[: len(old)] = old
-            setattr(self, name, new)
+        super()._alloc(cap)
         self._plans.extend([None] * (cap - len(self._plans)))
 
     def add(self, row: int, kind: int, limits: MotionLimits) -> int:
@@ -157,14 +116,14 @@ class KinematicEngine:
                 self._alloc(2 * len(self.row))
         self.row[slot] = row
         self.kind[slot] = kind
-        self.mode[slot] = _IDLE
+        self._set_mode(slot, IDLE)
         self.set_limits(slot, limits)
         self._plans[slot] = None
         return slot
 
     def remove(self, slot: int) -> None:
         """Free a slot (no motion-end callback)."""
-        self.mode[slot] = _IDLE
+        self._set_mode(slot, IDLE)
         self.row[slot] = -1
         self._plans[slot] = None
         heapq.heappush(self._free, slot)
@@ -189,7 +148,7 @@ class KinematicEngine:
             "free": sorted(self._free),
             "stopped": list(self._stopped),
             "plans": list(self._plans[:high]),
-            "columns": {name: getattr(self, name)[:high].copy() for name in _COLUMNS},
+            "columns": {name: getattr(self, name)[:high].copy() for name in COLUMNS},
         }
 
     def set_state(self, state: dict[str, Any]) -> None:
@@ -207,6 +166,9 @@ class KinematicEngine:
             )
         for name, values in state["columns"].items():
             getattr(self, name)[:high] = values
+        for slot in range(high):
+            self._derive(slot)
+        self._moving = None
         self._free = list(state["free"])
         heapq.heapify(self._free)
         self._stopped = list(state["stopped"])
@@ -216,14 +178,20 @@ class KinematicEngine:
 
     def is_idle(self) -> bool:
         """Whether ``advance`` would change nothing (no motion, no arrival left to settle)."""
-        return not self._stopped and not np.count_nonzero(self.mode[: self._high])
+        if self._stopped:
+            return False
+        pose, _, vel = self._moving_slots()
+        return not (len(pose) or len(vel))
 
     def is_moving(self, slot: int) -> bool:
         """Whether the slot follows a path or a non-zero velocity command."""
         mode = self.mode[slot]
-        if mode == _POSE:
+        if mode == POSE:
             return True
-        return bool(mode == _VELOCITY and (self.vel[slot].any() or self.cmd[slot].any()))
+        return bool(
+            mode == VELOCITY
+            and (np.count_nonzero(self.vel[slot]) or np.count_nonzero(self.cmd[slot]))
+        )
 
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""
@@ -267,23 +235,23 @@ class KinematicEngine:
             final_orientation=wps[-1].orientation.copy(),
             total=len(wps),
         )
-        self.mode[slot] = _POSE
+        self._set_mode(slot, POSE)
         self._plan_next(slot)
 
     def set_velocity(self, slot: int, command: Sequence[float]) -> None:
         """Follow a body-frame velocity command (vx, vy, vz in m/s, wz in rad/s)."""
-        if self.mode[slot] == _POSE:
+        if self.mode[slot] == POSE:
             self._interrupt(slot)
-        if self.mode[slot] != _VELOCITY:
+        if self.mode[slot] != VELOCITY:
             # Start from the current motion so the command ramps within the accel limits.
             self.vel[slot] = body_velocity(self._store, int(self.row[slot]))
         self.cmd[slot] = command
-        self.mode[slot] = _VELOCITY
+        self._set_mode(slot, VELOCITY)
 
     def stop(self, slot: int) -> None:
         """Stop at once: no path, no command, zero velocity."""
         self._interrupt(slot)
-        self.mode[slot] = _IDLE
+        self._set_mode(slot, IDLE)
         self.cmd[slot] = 0.0
         self.vel[slot] = 0.0
         row = self.row[slot]
@@ -292,9 +260,9 @@ class KinematicEngine:
 
     def _interrupt(self, slot: int) -> None:
         """End a path in progress without reaching it (motion-end callback, reached=False)."""
-        if self._plans[slot] is not None or self.mode[slot] == _POSE:
+        if self._plans[slot] is not None or self.mode[slot] == POSE:
             self._plans[slot] = None
-            self.mode[slot] = _IDLE
+            self._set_mode(slot, IDLE)
             self._on_motion_end(slot, False)
 
     # ----- planning (Python, once per segment) ---------------------------------------------
@@ -392,14 +360,15 @@ class KinematicEngine:
         self.u_peak[slot] = peak
         self.u_t_acc[slot] = t_acc
         self.u_t_end[slot] = t_end
-        self.mode[slot] = _POSE
+        self._derive(slot)
+        self._set_mode(slot, POSE)
         return True
 
     def _finish(self, slot: int, reached: bool) -> None:
         # The velocity of the step that arrived stays visible for that step; it is zeroed at
         # the start of the next advance unless a new segment is under way by then.
         self._plans[slot] = None
-        self.mode[slot] = _IDLE
+        self._set_mode(slot, IDLE)
         self._stopped.append(slot)
         self._on_motion_end(slot, reached)
 
@@ -410,17 +379,15 @@ class KinematicEngine:
         if self._high == 0:
             return
         if self._stopped:
-            idle = [s for s in self._stopped if self.mode[s] == _IDLE and self.row[s] >= 0]
+            idle = [s for s in self._stopped if self.mode[s] == IDLE and self.row[s] >= 0]
             self._stopped.clear()
             if idle:
                 rows = self.row[idle]
                 self._store.velocity[rows] = 0.0
                 self._store.angular_velocity[rows] = 0.0
-        mode = self.mode[: self._high]
-        pose_slots = np.flatnonzero(mode == _POSE)
+        pose_slots, pose_rows, vel_slots = self._moving_slots()
         if len(pose_slots):
-            self._advance_pose(pose_slots, dt)
-        vel_slots = np.flatnonzero(mode == _VELOCITY)
+            self._advance_pose(pose_slots, pose_rows, dt)
         if len(vel_slots):
             self._advance_velocity(vel_slots, dt)
 
@@ -428,57 +395,66 @@ class KinematicEngine:
         """Move one slot by ``dt`` seconds (an agent advanced on its own, outside a step)."""
         if slot in self._stopped:
             self._stopped.remove(slot)
-            if self.mode[slot] == _IDLE:
+            if self.mode[slot] == IDLE:
                 self._store.velocity[self.row[slot]] = 0.0
                 self._store.angular_velocity[self.row[slot]] = 0.0
-        if self.mode[slot] == _POSE:
-            self._advance_pose(np.array([slot]), dt)
-        elif self.mode[slot] == _VELOCITY:
+        if self.mode[slot] == POSE:
+            self._advance_pose(np.array([slot]), self.row[slot : slot + 1], dt)
+        elif self.mode[slot] == VELOCITY:
             self._advance_velocity(np.array([slot]), dt)
 
-    def _advance_pose(self, s: np.ndarray, dt: float) -> None:
+    def _advance_pose(self, s: np.ndarray, rows: np.ndarray, dt: float) -> None:
+        # One gather of the float columns a step reads (see slots.py); a 100-robot step is a
+        # few dozen numpy calls, so each one saved counts.
+        f = self._floats[:MOVE_END, s]  # (columns, slots): f[AT[name]] is one column
         store = self._store
-        u = self.u[s]
-        steps = self.steps[s] + 1.0
-        self.steps[s] = steps
-        t_end = self.u_t_end[s]
-        # The step in which the profile's end falls is the arrival step (tolerance: the float
-        # error of k * dt, so that 14 steps of 0.1 s cover a 1.4 s segment).
+        steps = f[AT["steps"]] + 1.0
+        # The step in which the profile's end falls is the arrival step (t_arrive: t_end less
+        # the float error of k * dt, so that 14 steps of 0.1 s cover a 1.4 s segment).
         elapsed = steps * dt
-        arrived = elapsed >= t_end - 1e-9
-        any_arrived = bool(arrived.any())
-        u_new = trapezoid_progress(elapsed, self.u_peak[s], self.u_t_acc[s], t_end)
+        arrived = elapsed >= f[AT["t_arrive"]]
+        any_arrived = bool(np.count_nonzero(arrived))
+        u_new = trapezoid_progress(elapsed, f[PROFILE_AT], f[AT["u_t_end"]])
         if any_arrived:
             u_new[arrived] = 1.0
+        u_old = f[AT["u"]]
         self.u[s] = u_new
-        rows = self.row[s]
+        self.steps[s] = steps
         old_pos = store.position[rows]
-        p0 = self.p0[s]
-        pos = p0 + (self.p1[s] - p0) * u_new[:, None]
+        pos = f[AT["p0"]].T + f[AT["dp"]].T * u_new[:, None]
         if any_arrived:
-            pos[arrived] = self.p1[s[arrived]]
+            pos[arrived] = f[AT["p1"]].T[arrived]
         store.velocity[rows] = (pos - old_pos) / dt
         store.position[rows] = pos
         # Orientation work only for segments that rotate (pure translations keep theirs).
-        turning = self.theta[s] > 0.0
-        if turning.any():
-            t, r, un = s[turning], rows[turning], u_new[turning]
+        theta = f[AT["theta"]]
+        turning = theta > 0.0
+        if not np.count_nonzero(turning):
+            store.angular_velocity[rows] = 0.0
+        else:
+            t = turning.nonzero()[0]
+            ft, un = self._floats[:TURN_END, s[t]], u_new[t]
             quat = quat_slerp_batch(
-                self.q0[t], self.q1[t], un, self.sl_dot[t], self.sl_theta[t], self.sl_sin[t]
+                ft[AT["q0"]].T,
+                ft[AT["q1"]].T,
+                un,
+                ft[AT["sl_dot"]],
+                ft[AT["sl_theta"]],
+                ft[AT["sl_sin"]],
             )
-            done = arrived[turning]
-            if done.any():
-                quat[done] = self.q_goal[t[done]]
+            done = arrived[t]
+            if np.count_nonzero(done):
+                quat[done] = ft[AT["q_goal"]].T[done]
+            if len(t) < len(rows):
+                store.angular_velocity[rows] = 0.0
+            r = rows[t]
             store.orientation[r] = quat
-            store.angular_velocity[r] = (
-                self.axis[t] * ((un - u[turning]) * self.theta[t] / dt)[:, None]
-            )
-        if not turning.all():
-            store.angular_velocity[rows[~turning]] = 0.0
+            rate = (un - u_old[t]) * theta[t] / dt
+            store.angular_velocity[r] = ft[AT["axis"]].T * rate[:, None]
         store.mark_moved(rows)
         if any_arrived:
             for slot in s[arrived].tolist():
-                if self.mode[slot] == _POSE and self._plans[slot] is not None:
+                if self.mode[slot] == POSE and self._plans[slot] is not None:
                     self._plan_next(slot)
 
     def _advance_velocity(self, s: np.ndarray, dt: float) -> None:

@@ -19,10 +19,12 @@ from fleet_async.core.geometry.quaternions import quat_from_euler, yaw_from_quat
 __all__ = [
     "EPS_ANGLE",
     "EPS_LEN",
+    "PROFILE_TERMS",
     "MotionLimits",
     "axis_cap",
     "checked_limit",
     "heading_toward",
+    "profile_terms",
     "trapezoid_duration",
     "trapezoid_progress",
 ]
@@ -96,22 +98,49 @@ def trapezoid_duration(rate: float, accel: float) -> tuple[float, float, float]:
     return peak, t_acc, t_acc + 1.0 / peak
 
 
+PROFILE_TERMS = ("pk", "pk_half", "pk_t_acc", "pk_divisor", "pk_t_acc_half", "pk_t_brake")
+"""Names of :func:`profile_terms`' values, in order."""
+
+
+def profile_terms(peak: float, t_acc: float, t_end: float) -> tuple[float, ...]:
+    """The terms :func:`trapezoid_progress` takes for the profile ``(peak, t_acc, t_end)`` of
+    :func:`trapezoid_duration`, worked out once per segment rather than once per step.
+
+    Profiles with an infinite acceleration (``t_acc`` 0) or an infinite rate (``t_end`` 0)
+    get terms that need no division by zero and give ``u = 1`` from ``t_end`` on.
+    """
+    if not math.isfinite(peak):  # ends at once: braking from t = 0, to u = 1
+        return 0.0, 0.0, 0.0, 1.0, 0.0, 0.0
+    if t_acc <= 0.0:  # no ramps: cruise until t_end, then u = 1
+        return peak, 0.5 * peak, 0.0, 1.0, 0.0, t_end
+    return peak, 0.5 * peak, t_acc, t_acc, 0.5 * t_acc, t_end - t_acc
+
+
 def trapezoid_progress(
-    t: np.ndarray, peak: np.ndarray, t_acc: np.ndarray, t_end: np.ndarray
+    t: np.ndarray,
+    terms: tuple[np.ndarray, ...] | np.ndarray,
+    t_end: np.ndarray,
 ) -> np.ndarray:
     """Progress ``u(t)`` of rest-to-rest profiles (see :func:`trapezoid_duration`), in [0, 1].
 
     Accelerates at ``peak / t_acc`` for ``t_acc`` seconds, cruises at ``peak`` and brakes
     symmetrically to stop at ``u = 1`` at ``t_end``; exact at every ``t``, so sampling it once
     per step never exceeds the limits, whatever the step.
+
+    Args:
+        t: Seconds since each profile started.
+        terms: The :func:`profile_terms` of each profile: six arrays, or one ``(6, n)`` array.
+        t_end: Each profile's duration.
     """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cruise = peak * (t - 0.5 * t_acc)
-        rising = 0.5 * peak * t * t / t_acc
-        left = np.maximum(t_end - t, 0.0)
-        braking = 1.0 - 0.5 * peak * left * left / t_acc
-        u = np.where(t < t_acc, rising, np.where(t > t_end - t_acc, braking, cruise))
-    return np.clip(u, 0.0, 1.0)
+    peak, half_peak, t_acc, divisor, half_t_acc, t_brake = terms
+    cruise = peak * (t - half_t_acc)
+    rising = half_peak * t * t / divisor
+    left = np.maximum(t_end - t, 0.0)
+    braking = 1.0 - half_peak * left * left / divisor
+    u = np.where(t < t_acc, rising, np.where(t > t_brake, braking, cruise))
+    # Each branch is >= 0 where it is chosen (rising and cruise by construction, braking is
+    # at least 1 - peak * t_acc / 2 >= 1/2), so only the top needs a clip.
+    return np.minimum(u, 1.0, out=u)
 
 
 def axis_cap(limit: np.ndarray, scalar: bool, direction: np.ndarray) -> float:
