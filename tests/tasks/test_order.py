@@ -172,9 +172,7 @@ def test_a_lone_mission_error_is_raised_as_itself(backend):
 
         with pytest.raises(ValueError, match="child failed") as caught:
             fa.run(sim, parent, backend=backend)
-        assert getattr(caught.value, "__notes__", []) == [
-            "in mission 'child' at sim time 0.500 s"
-        ]
+        assert getattr(caught.value, "__notes__", []) == ["in mission 'child' at sim time 0.500 s"]
 
         async def body_fails():  # the task group's own body raises: the group fails the mission
             async with sim.task_group():
