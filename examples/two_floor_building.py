@@ -2,6 +2,10 @@
 
 Run:  python examples/two_floor_building.py [--deliveries 1] [--backend asyncio|trio]
                                             [--max-steps N] [--record out.gif]
+                                            [--trace out.fatrace]
+
+With --trace, `fleet-async view out.fatrace` replays the run in the browser: set the z range
+to 2-5 m to see the upper floor.
 
 The building is the scenario file examples/scenarios/two_floor_building.yaml: a dispenser on
 the ground floor, a lift, and upstairs a wall with a sliding door in front of an ingestor.
@@ -160,12 +164,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--backend", choices=["asyncio", "trio"], default="asyncio")
     parser.add_argument("--max-steps", type=int, default=4000, help="stop after this many steps")
     parser.add_argument("--record", metavar="OUT.gif", help="record the run to a GIF")
+    parser.add_argument(
+        "--trace", metavar="OUT.fatrace", help="trace the run for the browser viewer"
+    )
     parser.add_argument("--gui", action="store_true", help="open the PyBullet window")
     args = parser.parse_args(argv)
 
     sim, couriers = build(args.gui)
     with sim:
         counts = narrate(sim)
+        if args.trace:
+            sim.start_trace(args.trace)
         if args.record:
             sim.start_recording(
                 args.record,
@@ -191,6 +200,9 @@ def main(argv: list[str] | None = None) -> int:
         )
         if args.record:
             print(f"recorded {sim.stop_recording()}")
+        if args.trace:
+            sim.stop_trace()
+            print(f"traced to {args.trace}: fleet-async view {args.trace}")
         expected = len(couriers) * args.deliveries
         if finished is None:
             print(

@@ -140,3 +140,51 @@ def test_truncated_trace_shows_an_error_naming_file_and_version(
     assert page.get_attribute("#app", "data-state") == "error"
     message = page.inner_text("#error")
     assert "cut.fatrace" in message and "truncated" in message and "version 1" in message
+
+
+def test_stacked_robots_get_a_count_and_devices_are_not_counted_as_robots(
+    browser_page, serve, tmp_path
+):
+    # Three robots on one spot (robots driving through each other to one drop point hide
+    # each other from above) and a door: the page says 4 robots, marks the stack "x3", and
+    # draws the door as a device, not a robot.
+    from fleet_async import (
+        Agent,
+        AgentSpawnParams,
+        Door,
+        MultiRobotSimulationCore,
+        Pose,
+        SimulationParams,
+    )
+    from fleet_async.core.world.shapes import ShapeParams
+
+    path = tmp_path / "stacked.fatrace"
+    cube = ShapeParams("box", half_extents=[0.2, 0.2, 0.1])
+    params = SimulationParams(gui=False, monitor=False, target_rtf=0.0, enable_floor=False)
+    with MultiRobotSimulationCore(params) as sim:
+        for x in (0.0, 0.0, 0.0, 2.0):
+            Agent.from_params(
+                AgentSpawnParams(
+                    visual_shape=cube, collision_shape=cube, initial_pose=Pose.from_xyz(x, 0.0, 0.1)
+                ),
+                sim,
+            )
+        Door.from_dict({"name": "door", "pose": [1.0, 2.0, 0.0], "open_time": 1.0}, sim)
+        sim.start_trace(path)
+        for _ in range(3):
+            sim.step_once()
+    reader = TraceReader(path)
+    assert [b.get("device", False) for b in reader.bodies.values() if b["kind"] == "agent"] == [
+        False,
+        False,
+        False,
+        False,
+        True,
+    ]
+    page = browser_page
+    open_trace(page, serve(path))
+    page.evaluate("viewer.seek(0.1)")
+    assert " 4 robots" in page.inner_text("#status")
+    page.wait_for_function("document.getElementById('app').dataset.stacked === '1'")
+    page.evaluate("viewer.setZRange(1.0, 3.0)")  # nobody up there: no stack to mark
+    page.wait_for_function("document.getElementById('app').dataset.stacked === '0'")

@@ -5,6 +5,12 @@
 // positions, int16 yaw, flag bytes) for the two frames around the clock, and interpolates.
 "use strict";
 
+// A robot: an agent that is not a device (doors, lifts and workcells are agents too, and are
+// drawn in their own colours, without a heading mark, and not counted as robots).
+function isRobot(b) {
+  return b !== undefined && b !== null && b.kind === "agent" && !b.device;
+}
+
 const STATE_COLOURS = {
   idle: [0.56, 0.64, 0.68],
   moving: [0.16, 0.55, 0.95],
@@ -154,7 +160,7 @@ class GLRenderer {
       if (s) {
         shape.set([s.center[0], s.center[1], s.radius || s.half[0], s.radius || s.half[1]], 4 * i);
         color.set(s.rgba.map((c) => Math.round(c * 255)), 4 * i);
-        info.set([b.kind === "agent" ? 2 : b.kind === "static" ? 0 : 1, s.type === "circle" ? 1 : 0, s.z ? s.z[1] : 0], 3 * i);
+        info.set([isRobot(b) ? 2 : b.kind === "static" ? 0 : 1, s.type === "circle" ? 1 : 0, s.z ? s.z[1] : 0], 3 * i);
       } else {
         shape.set([0, 0, 0.05, 0.05], 4 * i); color.set([128, 128, 128, 255], 4 * i);
         info.set([1, 1, 0], 3 * i);
@@ -362,7 +368,7 @@ class PixelRenderer {
       }
       hx = Math.max(hx, minHalf); hy = Math.max(hy, minHalf);
       let fill, border, nose;
-      const agent = b && b.kind === "agent";
+      const agent = isRobot(b);
       if (agent && byState) {
         const st = flags & 4 ? "failed" : flags & 2 ? "carrying" : flags & 1 ? "moving" : "idle";
         fill = PACKED[st]; border = PACKED_DARK[st]; nose = PACKED_NOSE[st];
@@ -386,7 +392,7 @@ class PixelRenderer {
       for (const pass of [false, true]) {
         for (let i = 0; i < n; i++) {
           const b = bodies[i];
-          if ((b !== undefined && b.kind === "agent") !== pass) continue;
+          if (isRobot(b) !== pass) continue;
           const j = 3 * i;
           let yaw = y0[i] * k;
           if (lerp) {

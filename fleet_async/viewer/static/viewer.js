@@ -81,7 +81,7 @@
 
   function countAgents() {
     let n = 0;
-    for (const b of data.bodies.values()) if (b.kind === "agent") n++;
+    for (const b of data.bodies.values()) if (isRobot(b)) n++;
     return n;
   }
 
@@ -272,10 +272,45 @@
     return { x, y, z, yaw, flags: f0.flags[i] };
   }
 
+  // Robots on (nearly) the same spot hide each other from above: groups of them, per frame,
+  // as [x, y, count] (a grid of STACK_CELL m; the z filter applies).
+  const STACK_CELL = 0.05;
+  let stacks = { frame: null, z: "", groups: [] };
+
+  function stackedRobots(f0) {
+    const [z0, z1] = zrange();
+    const zkey = `${z0},${z1}`;
+    if (stacks.frame === f0 && stacks.z === zkey) return stacks.groups;
+    const cells = new Map(), groups = [];
+    const bodies = layoutBodies(f0.layout);
+    for (let i = 0; i < f0.layout.n; i++) {
+      if (!isRobot(bodies[i])) continue;
+      const x = f0.pos[3 * i], y = f0.pos[3 * i + 1], z = f0.pos[3 * i + 2];
+      if (z < z0 || z > z1) continue;
+      const key = Math.round(x / STACK_CELL) * 4194304 + Math.round(y / STACK_CELL);
+      const g = cells.get(key);
+      if (g) g[2]++; else cells.set(key, [x, y, 1]);
+    }
+    for (const g of cells.values()) if (g[2] > 1) groups.push(g);
+    stacks = { frame: f0, z: zkey, groups };
+    return groups;
+  }
+
   function drawOverlay(f0, f1, alpha) {
     const ctx = overlay.getContext("2d"), dpr = view.dpr;
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     ctx.clearRect(0, 0, view.width, view.height);
+    const groups = f0 ? stackedRobots(f0) : [];
+    app.dataset.stacked = String(groups.length);
+    if (groups.length) {
+      ctx.font = "bold 12px sans-serif"; ctx.lineWidth = 3; ctx.strokeStyle = "#fff"; ctx.fillStyle = "#111";
+      for (const [x, y, count] of groups) {
+        const p = project(x, y);
+        if (p.x < -20 || p.y < -20 || p.x > view.width + 20 || p.y > view.height + 20) continue;
+        ctx.strokeText(`\u00d7${count}`, p.x + 6, p.y - 6);
+        ctx.fillText(`\u00d7${count}`, p.x + 6, p.y - 6);
+      }
+    }
     if (ui.selected === null) return;
     const pose = bodyPose(f0, f1, alpha, ui.selected);
     if (!pose) return;
@@ -304,7 +339,7 @@
       const reach = Math.max(shape ? (shape.radius || Math.hypot(shape.half[0], shape.half[1])) : 0.1, 6 / view.scale);
       const d = Math.hypot(x - w.x, y - w.y);
       if (d > reach) return;
-      if (body && body.kind === "agent") { if (d < best.agentD) { best.agent = id; best.agentD = d; } }
+      if (isRobot(body)) { if (d < best.agentD) { best.agent = id; best.agentD = d; } }
       else if (d < best.otherD) { best.other = id; best.otherD = d; }
     };
     if (f0) {

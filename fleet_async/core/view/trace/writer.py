@@ -309,6 +309,8 @@ class TraceWriter:
                 self._static_ids.add(obj.object_id)
             if obj.pickable and not obj.is_agent:
                 entry["pickable"] = True
+            if obj.is_agent and not obj.is_robot:  # a door, lift or workcell: not a robot
+                entry["device"] = True
             bodies.append(entry)
         self._new_bodies = []
         if bodies:
