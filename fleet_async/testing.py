@@ -13,11 +13,13 @@ under ``fleet_async.run`` on both anyio backends (asyncio and trio), so it can `
 The simulation is headless (``pybullet.DIRECT``), unpaced, with timestep 0.1 s and seed 0;
 override the ``fleet_sim_params`` fixture to change that. Limit backends with
 ``@pytest.mark.parametrize("fleet_backend", ["asyncio"])``. The plugin is registered through
-the ``pytest11`` entry point, so installing fleet-async is enough.
+the ``pytest11`` entry point, so installing fleet-async is enough; the trio variant needs trio
+(``pip install "fleet-async[trio]"``) and is skipped, with that reason, without it.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import inspect
 from collections.abc import Iterator
 from typing import Any
@@ -31,9 +33,16 @@ from fleet_async.tasks.run import run
 __all__ = ["fleet_backend", "fleet_sim", "fleet_sim_params", "fleet_sim_until", "run_mission_test"]
 
 
-@pytest.fixture(params=["asyncio", "trio"])
+_NO_TRIO = pytest.mark.skipif(
+    importlib.util.find_spec("trio") is None,
+    reason='trio is not installed: pip install "fleet-async[trio]" to run the trio variant',
+)
+
+
+@pytest.fixture(params=["asyncio", pytest.param("trio", marks=_NO_TRIO)])
 def fleet_backend(request: pytest.FixtureRequest) -> str:
-    """The anyio backend a ``fleet_sim`` test runs on (both, by default)."""
+    """The anyio backend a ``fleet_sim`` test runs on (both, by default; the trio variant is
+    skipped, saying so, where trio is not installed)."""
     return str(request.param)
 
 

@@ -305,6 +305,22 @@ def test_run_bad_key_names_key_and_file(script, tmp_path):
     assert result.stdout == ""
 
 
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("gui: maybe", "simulation.gui: expected bool, got 'maybe'"),
+        ("target_rtf: [1]", "simulation.target_rtf"),
+    ],
+)
+def test_run_bad_gui_or_rtf_in_the_file_is_reported_not_overridden(script, tmp_path, line, message):
+    # The command line sets gui and target_rtf itself; the file's wrong value is still an error.
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(f"simulation:\n  timestep: 0.1\n  {line}\n")
+    result = cli(script, "run", bad, "--duration", "1")
+    assert result.returncode == 2
+    assert str(bad) in error_line(result.stderr) and message in error_line(result.stderr)
+
+
 def test_run_missing_file_is_an_error(script, tmp_path):
     result = cli(script, "run", tmp_path / "nope.yaml")
     assert result.returncode == 2

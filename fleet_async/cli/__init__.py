@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 
 import fleet_async
@@ -92,7 +93,6 @@ def _add_run(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
     parser = subparsers.add_parser(
         "run",
-        help="run a scenario YAML headless and print a summary",
         description="Build the simulation of SCENARIO.yaml as MultiRobotSimulationCore.from_yaml\n"
         "does, run its missions and actions, and print a summary.",
         epilog=_RUN_EPILOG,
@@ -108,7 +108,6 @@ def _add_sweep(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
     parser = subparsers.add_parser(
         "sweep",
-        help="run a scenario over a parameter grid and seeds into a table of fleet KPIs",
         description="Run SCENARIO once per (grid point, seed): the grid is every combination "
         "of the\n--set values. Each run is one row of fleet KPIs in the --out table.",
         epilog=sweep.EPILOG,
@@ -124,7 +123,6 @@ def _add_examples(subparsers: argparse._SubParsersAction[argparse.ArgumentParser
 
     parser = subparsers.add_parser(
         "examples",
-        help="list (the default), run or copy the examples",
         usage=examples.USAGE,
         description="The examples ship with fleet-async: Python scripts (*.py) and scenarios\n"
         "(scenarios/*.yaml), the same files as the source tree's examples/ folder.",
@@ -144,8 +142,7 @@ def _add_view(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -
 
     parser = subparsers.add_parser(
         "view",
-        help="replay a trace in the browser viewer",
-        description=(view.__doc__ or "").strip(),
+        description=_plain((view.__doc__ or "").strip()),
         epilog="examples:\n  fleet-async run examples/scenarios/warehouse.yaml --trace wh.fatrace\n"
         "  fleet-async view wh.fatrace\n  fleet-async view wh.fatrace --port 0 --no-browser",
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -170,13 +167,17 @@ def _add_bench(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
     doc = (bench.__doc__ or "").split("\n\nRun:")[0]
     parser = subparsers.add_parser(
         "bench",
-        help="run the fleet-scale benchmark",
-        description=doc,
+        description=_plain(doc),
         formatter_class=argparse.RawDescriptionHelpFormatter,
         parents=[_common_options(argparse.SUPPRESS)],
     )
     bench.add_arguments(parser)
     parser.set_defaults(handler=_run_bench)
+
+
+def _plain(doc: str) -> str:
+    """A docstring as terminal text: reST literals (double backticks) in single quotes."""
+    return doc.replace("``", "'")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -193,7 +194,13 @@ def build_parser() -> argparse.ArgumentParser:
         version=f"%(prog)s {fleet_async.__version__}",
         help="print the version and exit",
     )
-    subparsers = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
+    # The commands are listed, with what each does, in the description above.
+    subparsers = parser.add_subparsers(
+        title="commands",
+        dest="command",
+        metavar="COMMAND",
+        help="run, sweep, examples, view or bench (see above)",
+    )
     subparsers.required = True
     _add_run(subparsers)
     _add_sweep(subparsers)
@@ -224,8 +231,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         The exit code.
     """
     arguments = list(argv) if argv is not None else sys.argv[1:]
-    with native_output_hidden(enabled=not _wants_verbose(arguments)) as hidden:
-        code = _main(arguments)
+    formatter = warnings.formatwarning
+    if not _wants_verbose(arguments):  # a warning is one plain line, not a source listing
+        warnings.formatwarning = _warning_line
+    try:
+        with native_output_hidden(enabled=not _wants_verbose(arguments)) as hidden:
+            code = _main(arguments)
+    finally:
+        warnings.formatwarning = formatter
     if code != 0 and hidden.line_count:
         lines = f"{hidden.line_count} line{'s' if hidden.line_count != 1 else ''}"
         print(
@@ -233,6 +246,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
     return code
+
+
+def _warning_line(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    line: str | None = None,
+) -> str:
+    return f"{PROG}: warning: {message}\n"
 
 
 def _main(arguments: list[str]) -> int:

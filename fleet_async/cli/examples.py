@@ -36,7 +36,7 @@ __all__ = [
     "script_description",
 ]
 
-USAGE = "fleet-async examples [-h] [--list | --run NAME [ARGS ...] | --copy DIR]"
+USAGE = "fleet-async examples [-h] [--verbose] [--list | --run NAME [ARGS ...] | --copy DIR]"
 _SKIPPED_PARTS = ("__pycache__",)
 _SKIPPED_SUFFIXES = (".pyc",)
 

@@ -33,6 +33,7 @@ from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
 from fleet_async.core.sim.camera_config import parse_camera_mode
+from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.core.view.runner import steps_for
@@ -238,6 +239,10 @@ def load_scenario(
         settings = config
     # A malformed 'simulation:' section is left for the loader to report.
     if isinstance(settings, dict):
+        # The command line overrides gui and target_rtf: check the file's values first, so a
+        # wrong one is reported (field, value, file) rather than silently replaced.
+        given = {key: settings[key] for key in ("gui", "target_rtf") if key in settings}
+        SimulationParams.from_dict(given, source=str(path))
         settings["gui"] = gui_on
         if rtf is not None:
             settings["target_rtf"] = rtf
