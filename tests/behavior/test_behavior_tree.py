@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from fleet_async import Agent, Door, Pose, ShapeParams
+from fleet_async import Agent, DeviceEvents, Door, Elevator, Pose, ShapeParams
 from fleet_async.behavior import (
     BehaviorTreeError,
     BehaviorTreeFactory,
@@ -213,6 +213,84 @@ async def test_fleet_nodes_fetch_carry_and_pass_a_door(fleet_sim):
     item = tree.blackboard["item"]
     assert item.name == "disp_item0" and item.sim_core is None  # ingested
     assert robot.get_pose().x == pytest.approx(3.6)
+
+
+def lift_and_log(sim) -> tuple[Elevator, list[tuple[float, str, str, list[str]]]]:
+    """A two-floor lift at x = 5 (3 m up, 1.5 m/s) and a log of its trips."""
+    lift = Elevator.from_dict(
+        {"name": "lift", "pose": [5.0, 0.0, 0.0], "floors": {"L1": 0.0, "L2": 3.0}, "speed": 1.5},
+        sim,
+    )
+    log: list[tuple[float, str, str, list[str]]] = []
+
+    def logger(what: str):
+        def handler(floor: str, passengers: tuple[Agent, ...], **_: object) -> None:
+            log.append((round(sim.now, 3), what, floor, [p.name for p in passengers]))
+
+        return handler
+
+    sim.events.on(DeviceEvents.ELEVATOR_DEPARTED, logger("departs"))
+    sim.events.on(DeviceEvents.ELEVATOR_ARRIVED, logger("arrives"))
+    return lift, log
+
+
+async def test_two_robots_trees_share_the_lift_one_ride_at_a_time(fleet_sim):
+    lift, trips = lift_and_log(fleet_sim)
+    factory = BehaviorTreeFactory()
+    robots = [
+        Agent.from_mesh(
+            BOX, BOX, Pose.from_xyz(3.0, y, 0.1), sim_core=fleet_sim, name=name, controller="omni"
+        )
+        for name, y in (("a", 0.5), ("b", -0.5))
+    ]
+    ended: dict[str, tuple[NodeStatus, float]] = {}
+
+    async def ride(robot: Agent, exit_y: float) -> None:
+        tree = factory.create_tree_from_text(
+            doc(f'<RideElevator elevator="lift" floor="L2" exit="6.5;{exit_y};3.1"/>'),
+            agent=robot,
+        )
+        ended[robot.name] = (await tree.run(), round(fleet_sim.now, 3))
+
+    async with fleet_sim.task_group() as tg:
+        tg.start_soon(ride, robots[0], 0.5)
+        tg.start_soon(ride, robots[1], -0.5)
+    # a asked first and rides alone; the lift comes back down empty for b, who waited.
+    assert trips == [
+        (1.5, "departs", "L1", ["a"]),
+        (3.4, "arrives", "L2", ["a"]),
+        (4.7, "departs", "L2", []),
+        (6.6, "arrives", "L1", []),
+        (8.2, "departs", "L1", ["b"]),
+        (10.1, "arrives", "L2", ["b"]),
+    ]
+    assert ended == {"a": (NodeStatus.SUCCESS, 4.7), "b": (NodeStatus.SUCCESS, 11.4)}
+    assert [r.get_pose().z for r in robots] == [pytest.approx(3.1)] * 2
+    assert lift.height == pytest.approx(3.0)
+
+
+async def test_a_timeout_cancels_a_ride_mid_way_and_says_so(fleet_sim):
+    lift, trips = lift_and_log(fleet_sim)
+    robot = Agent.from_mesh(
+        BOX, BOX, Pose.from_xyz(3.0, 0.5, 0.1), sim_core=fleet_sim, name="a", controller="omni"
+    )
+    abandoned: list[tuple[float, str, str]] = []
+    fleet_sim.events.on(
+        DeviceEvents.ELEVATOR_RIDE_ABANDONED,
+        lambda robot, floor, **_: abandoned.append((round(fleet_sim.now, 3), robot.name, floor)),
+    )
+    tree = BehaviorTreeFactory().create_tree_from_text(
+        doc('<Timeout msec="2500"><RideElevator elevator="lift" floor="L2"/></Timeout>'),
+        agent=robot,
+    )
+    assert await tree.run() is NodeStatus.FAILURE
+    assert fleet_sim.now == pytest.approx(2.5)  # mid-ride: the lift left L1 at 1.5 s
+    assert abandoned == [(2.5, "a", "L2")]
+    assert 0.1 < robot.get_pose().z < 3.1
+    await fleet_sim.sleep(1.0)
+    # The lift finishes its trip with the robot still on the platform.
+    assert trips == [(1.5, "departs", "L1", ["a"]), (3.4, "arrives", "L2", ["a"])]
+    assert robot.get_pose().z == pytest.approx(3.1) and lift.height == pytest.approx(3.0)
 
 
 async def test_a_failed_action_is_failure_and_a_missing_entry_is_an_error(fleet_sim):
