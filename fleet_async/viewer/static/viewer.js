@@ -273,25 +273,43 @@
   }
 
   // Robots on (nearly) the same spot hide each other from above: groups of them, per frame,
-  // as [x, y, count] (a grid of STACK_CELL m; the z filter applies).
-  const STACK_CELL = 0.05;
+  // as [x, y, count]. A robot joins a group whose first robot is nearer than half the smaller
+  // footprint half-size of the two (found through a grid of that size); the z filter applies.
   let stacks = { frame: null, z: "", groups: [] };
+
+  function stackRadius(b) {
+    const s = b.shapeInfo;
+    return 0.5 * (s ? (s.radius || Math.min(s.half[0], s.half[1])) : 0.05);
+  }
 
   function stackedRobots(f0) {
     const [z0, z1] = zrange();
     const zkey = `${z0},${z1}`;
     if (stacks.frame === f0 && stacks.z === zkey) return stacks.groups;
-    const cells = new Map(), groups = [];
-    const bodies = layoutBodies(f0.layout);
-    for (let i = 0; i < f0.layout.n; i++) {
-      if (!isRobot(bodies[i])) continue;
+    const bodies = layoutBodies(f0.layout), n = f0.layout.n;
+    let cell = 0;
+    for (let i = 0; i < n; i++) if (isRobot(bodies[i])) cell = Math.max(cell, stackRadius(bodies[i]));
+    const cells = new Map(), all = [];
+    for (let i = 0; cell > 0 && i < n; i++) {
+      const b = bodies[i];
+      if (!isRobot(b)) continue;
       const x = f0.pos[3 * i], y = f0.pos[3 * i + 1], z = f0.pos[3 * i + 2];
       if (z < z0 || z > z1) continue;
-      const key = Math.round(x / STACK_CELL) * 4194304 + Math.round(y / STACK_CELL);
-      const g = cells.get(key);
-      if (g) g[2]++; else cells.set(key, [x, y, 1]);
+      const r = stackRadius(b), kx = Math.floor(x / cell), ky = Math.floor(y / cell);
+      let group = null;
+      for (let dx = -1; dx <= 1 && !group; dx++) {
+        for (let dy = -1; dy <= 1 && !group; dy++) {
+          for (const g of cells.get((kx + dx) * 4194304 + (ky + dy)) || []) {
+            if (Math.hypot(g[0] - x, g[1] - y) < Math.min(g[3], r)) { group = g; break; }
+          }
+        }
+      }
+      if (group) { group[2]++; continue; }
+      const g = [x, y, 1, r], key = kx * 4194304 + ky;
+      if (cells.has(key)) cells.get(key).push(g); else cells.set(key, [g]);
+      all.push(g);
     }
-    for (const g of cells.values()) if (g[2] > 1) groups.push(g);
+    const groups = all.filter((g) => g[2] > 1);
     stacks = { frame: f0, z: zkey, groups };
     return groups;
   }
