@@ -99,10 +99,11 @@ class CollisionGeometry:
         self.exact = np.zeros(0, dtype=bool)
         self.center = np.zeros((0, 3))  # body-frame AABB center offset
         self.half = np.zeros((0, 3))  # body-frame AABB half extents
-        # Minima and maxima side by side, (rows, 2, 3), so one numpy call covers both; the
-        # *_min / *_max names are views. lo_off / hi_off: center -/+ half -/+ pad, unrotated.
-        self.offsets = np.zeros((0, 2, 3))
-        self.aabb = np.zeros((0, 2, 3))
+        # Minima and maxima as one (2, rows, 3) array, so one numpy call covers both; the
+        # *_min / *_max names are its two (rows, 3) halves. lo_off / hi_off: center -/+ half
+        # -/+ pad, unrotated.
+        self.offsets = np.zeros((2, 0, 3))
+        self.aabb = np.zeros((2, 0, 3))
         self._views()
         self._shapes: dict[int, _ShapeInfo] = {}
         self.registrations = 0
@@ -128,20 +129,22 @@ class CollisionGeometry:
             ("exact", 0, bool, False),
             ("center", 3, float, 0.0),
             ("half", 3, float, 0.0),
-            ("offsets", (2, 3), float, 0.0),
-            ("aabb", (2, 3), float, 0.0),
         ):
             old = getattr(self, name)
-            shape = width if isinstance(width, tuple) else (width,) if width else ()
-            new = np.full((cap, *shape), fill, dtype=dtype)
+            new = np.full((cap, width) if width else cap, fill, dtype=dtype)
             new[: len(old)] = old
+            setattr(self, name, new)
+        for name in ("offsets", "aabb"):
+            old = getattr(self, name)
+            new = np.zeros((2, cap, 3))
+            new[:, : old.shape[1]] = old
             setattr(self, name, new)
         self._cap = cap
         self._views()
 
     def _views(self) -> None:
-        self.lo_off, self.hi_off = self.offsets[:, 0], self.offsets[:, 1]
-        self.aabb_min, self.aabb_max = self.aabb[:, 0], self.aabb[:, 1]
+        self.lo_off, self.hi_off = self.offsets[0], self.offsets[1]
+        self.aabb_min, self.aabb_max = self.aabb[0], self.aabb[1]
 
     # ----- registration -------------------------------------------------------------------
 
@@ -275,7 +278,7 @@ class CollisionGeometry:
             if not len(rows):
                 return
         if np.count_nonzero(upright) == upright.size:
-            self.aabb[rows] = store.position[rows, None, :] + self.offsets[rows]
+            self.aabb[:, rows] = store.position[rows] + self.offsets.take(rows, axis=1)
             return
         if np.count_nonzero(upright):
             r = rows[upright]
@@ -298,7 +301,7 @@ class CollisionGeometry:
         quats = store.orientation[:high]
         if np.count_nonzero(quats[:, :3]) or np.count_nonzero(quats[:, 3] != 1.0):
             return False
-        np.add(store.position[:high, None, :], self.offsets[:high], out=self.aabb[:high])
+        np.add(store.position[:high], self.offsets[:, :high], out=self.aabb[:, :high])
         self.exact[:high] = self.box[:high]
         return True
 

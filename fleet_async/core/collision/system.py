@@ -292,10 +292,10 @@ class CollisionSystem:
         store, geo = self._sim.state, self.geometry
         rows = self._rows
         high = store.high_water
-        boxes = geo.aabb[:high] if self._all_rows else geo.aabb[rows]
+        boxes = geo.aabb[:, :high] if self._all_rows else geo.aabb.take(rows, axis=1)
         if moved is None:
             moved = store.moved[:high] if self._all_rows else store.moved[rows]
-        amin, amax = boxes[:, 0], boxes[:, 1]
+        amin, amax = boxes[0], boxes[1]
         side_by_side: np.ndarray | None = boxes
         threshold = self.multi_cell_threshold
         if sweep:
@@ -371,7 +371,7 @@ class CollisionSystem:
         ended, started = self._active.update(row_pairs[touching], store)
         if self.sweep:
             self._start[moved_rows] = store.position[moved_rows]
-        store.moved[moved_rows] = False
+        store.moved[: store.high_water] = False  # moved_rows are all the flagged rows: a fill
         if not (len(ended) or len(started)):
             return 0.0
         t0 = time.perf_counter()

@@ -53,10 +53,8 @@ from fleet_async.core.motion.slots import (
     AT,
     COLUMNS,
     IDLE,
-    MOVE_END,
     POSE,
     PROFILE_AT,
-    TURN_END,
     VELOCITY,
     SlotTable,
 )
@@ -406,7 +404,7 @@ class KinematicEngine(SlotTable):
     def _advance_pose(self, s: np.ndarray, rows: np.ndarray, dt: float) -> None:
         # One gather of the float columns a step reads (see slots.py); a 100-robot step is a
         # few dozen numpy calls, so each one saved counts.
-        f = self._floats[:MOVE_END, s]  # (columns, slots): f[AT[name]] is one column
+        f = self._move_block.take(s, axis=1)  # (columns, slots): f[AT[name]] is one column
         store = self._store
         steps = f[AT["steps"]] + 1.0
         # The step in which the profile's end falls is the arrival step (t_arrive: t_end less
@@ -421,9 +419,10 @@ class KinematicEngine(SlotTable):
         self.u[s] = u_new
         self.steps[s] = steps
         old_pos = store.position[rows]
-        pos = f[AT["p0"]].T + f[AT["dp"]].T * u_new[:, None]
+        pos3 = f[AT["p0"]] + f[AT["dp"]] * u_new  # (3, slots)
         if any_arrived:
-            pos[arrived] = f[AT["p1"]].T[arrived]
+            pos3[:, arrived] = f[AT["p1"]][:, arrived]
+        pos = pos3.T
         store.velocity[rows] = (pos - old_pos) / dt
         store.position[rows] = pos
         # Orientation work only for segments that rotate (pure translations keep theirs).
@@ -433,7 +432,7 @@ class KinematicEngine(SlotTable):
             store.angular_velocity[rows] = 0.0
         else:
             t = turning.nonzero()[0]
-            ft, un = self._floats[:TURN_END, s[t]], u_new[t]
+            ft, un = self._turn_block.take(s[t], axis=1), u_new[t]
             quat = quat_slerp_batch(
                 ft[AT["q0"]].T,
                 ft[AT["q1"]].T,

@@ -146,6 +146,10 @@ class SlotTable:
         self._floats = floats
         for name, place in AT.items():
             setattr(self, name, floats[place].T)  # (cap, width) views; (cap,) for width 1
+        # What a step reads, as blocks to gather with take(slots, axis=1): a C-ordered
+        # (columns, slots) copy, so each column the step computes on is contiguous.
+        self._move_block = floats[:MOVE_END]
+        self._turn_block = floats[:TURN_END]
         for name, (dtype, fill) in _OTHERS.items():
             new: np.ndarray = np.full(cap, fill, dtype=dtype)
             old = getattr(self, name, None)

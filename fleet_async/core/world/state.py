@@ -52,9 +52,8 @@ class KinematicState:
         self.collision_mode = np.zeros(capacity, dtype=np.int8)
         self.kinematic = np.ones(capacity, dtype=bool)
         self.active = np.zeros(capacity, dtype=bool)
-        # dirty and moved side by side, so marking a row moved sets both in one numpy call.
-        self._flags = np.zeros((capacity, 2), dtype=bool)
-        self.dirty, self.moved = self._flags[:, 0], self._flags[:, 1]
+        self.dirty = np.zeros(capacity, dtype=bool)
+        self.moved = np.zeros(capacity, dtype=bool)
         self._free: list[int] = []
         self._high_water = 0
         self.layout_version = 0
@@ -185,7 +184,8 @@ class KinematicState:
 
     def mark_moved(self, rows: int | np.ndarray) -> None:
         """Flag rows whose pose changed: stale in PyBullet, unseen by the collision system."""
-        self._flags[rows] = True
+        self.dirty[rows] = True
+        self.moved[rows] = True
 
     def live_rows(self) -> np.ndarray:
         """Indices of rows in use, ascending."""
@@ -218,12 +218,8 @@ class KinematicState:
             grown[old.shape[0] :] = fill
             setattr(self, name, grown)
         self.orientation[old_cap:, 3] = 1.0
-        for name in ("kinematic", "active"):
+        for name in ("kinematic", "active", "dirty", "moved"):
             old = getattr(self, name)
             grown = np.full(new_cap, name == "kinematic", dtype=bool)  # fresh rows: kinematic
             grown[: old.shape[0]] = old
             setattr(self, name, grown)
-        flags = np.zeros((new_cap, 2), dtype=bool)
-        flags[:old_cap] = self._flags
-        self._flags = flags
-        self.dirty, self.moved = flags[:, 0], flags[:, 1]
