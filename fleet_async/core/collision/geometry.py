@@ -257,7 +257,7 @@ class CollisionGeometry:
         ``exact`` flags."""
         if not len(rows):
             return
-        quats = store.orientation[rows]
+        quats = store.orientation.take(rows, axis=0)
         upright = (quats[:, 3] == 1.0) & ~quats[:, :3].any(axis=1)  # identity: no rotation work
         self.exact[rows] = upright & self.box[rows]  # never set for articulated rows
         if not force:
@@ -278,7 +278,7 @@ class CollisionGeometry:
             if not len(rows):
                 return
         if np.count_nonzero(upright) == upright.size:
-            self.aabb[:, rows] = store.position[rows] + self.offsets.take(rows, axis=1)
+            self.aabb[:, rows] = store.position.take(rows, axis=0) + self.offsets.take(rows, axis=1)
             return
         if np.count_nonzero(upright):
             r = rows[upright]

@@ -79,7 +79,7 @@ class NarrowPhase:
         if not k:
             return np.zeros(0, dtype=bool)
         geo = self._geo
-        pos = store.position[row_pairs] if positions is None else positions
+        pos = store.position.take(row_pairs, axis=0) if positions is None else positions
         if self.method is CollisionDetectionMethod.CLOSEST_POINTS or positions is not None:
             contact = None
             ok = geo.exact[row_pairs]
@@ -176,8 +176,8 @@ class NarrowPhase:
         per pair. ``pos``: (K, 2, 3) the two bodies' positions.
         """
         geo = self._geo
-        center = pos + geo.box_center[row_pairs]
-        half = geo.box_half[row_pairs]
+        center = pos + geo.box_center.take(row_pairs, axis=0)
+        half = geo.box_half.take(row_pairs, axis=0)
         gap = np.abs(center[:, 0] - center[:, 1]) - half[:, 0] - half[:, 1]
         np.maximum(gap, 0.0, out=gap)
         gap *= gap

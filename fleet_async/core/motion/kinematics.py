@@ -57,6 +57,7 @@ from fleet_async.core.motion.slots import (
     PROFILE_AT,
     VELOCITY,
     SlotTable,
+    flat_rows,
 )
 from fleet_async.core.motion.velocity import advance_velocity, body_velocity
 from fleet_async.core.world.state import KinematicState
@@ -178,7 +179,7 @@ class KinematicEngine(SlotTable):
         """Whether ``advance`` would change nothing (no motion, no arrival left to settle)."""
         if self._stopped:
             return False
-        pose, _, vel = self._moving_slots()
+        pose, _, _, vel = self._moving_slots()
         return not (len(pose) or len(vel))
 
     def is_moving(self, slot: int) -> bool:
@@ -310,8 +311,8 @@ class KinematicEngine(SlotTable):
         row = self.row[slot]
         px, py, pz = self._store.position[row].tolist()
         ax, ay, az, aw = self._store.orientation[row].tolist()
-        tx, ty, tz = (float(v) for v in target_pos)
-        bx, by, bz, bw = (float(v) for v in target_orn)
+        tx, ty, tz = np.asarray(target_pos, dtype=float).tolist()
+        bx, by, bz, bw = np.asarray(target_orn, dtype=float).tolist()
         dx, dy, dz = tx - px, ty - py, tz - pz
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
         dot = ax * bx + ay * by + az * bz + aw * bw
@@ -383,9 +384,9 @@ class KinematicEngine(SlotTable):
                 rows = self.row[idle]
                 self._store.velocity[rows] = 0.0
                 self._store.angular_velocity[rows] = 0.0
-        pose_slots, pose_rows, vel_slots = self._moving_slots()
+        pose_slots, pose_rows, flat, vel_slots = self._moving_slots()
         if len(pose_slots):
-            self._advance_pose(pose_slots, pose_rows, dt)
+            self._advance_pose(pose_slots, pose_rows, flat, dt)
         if len(vel_slots):
             self._advance_velocity(vel_slots, dt)
 
@@ -397,11 +398,12 @@ class KinematicEngine(SlotTable):
                 self._store.velocity[self.row[slot]] = 0.0
                 self._store.angular_velocity[self.row[slot]] = 0.0
         if self.mode[slot] == POSE:
-            self._advance_pose(np.array([slot]), self.row[slot : slot + 1], dt)
+            rows = self.row[slot : slot + 1]
+            self._advance_pose(np.array([slot]), rows, flat_rows(rows), dt)
         elif self.mode[slot] == VELOCITY:
             self._advance_velocity(np.array([slot]), dt)
 
-    def _advance_pose(self, s: np.ndarray, rows: np.ndarray, dt: float) -> None:
+    def _advance_pose(self, s: np.ndarray, rows: np.ndarray, flat: np.ndarray, dt: float) -> None:
         # One gather of the float columns a step reads (see slots.py); a 100-robot step is a
         # few dozen numpy calls, so each one saved counts.
         f = self._move_block.take(s, axis=1)  # (columns, slots): f[AT[name]] is one column
@@ -418,18 +420,18 @@ class KinematicEngine(SlotTable):
         u_old = f[AT["u"]]
         self.u[s] = u_new
         self.steps[s] = steps
-        old_pos = store.position[rows]
-        pos3 = f[AT["p0"]] + f[AT["dp"]] * u_new  # (3, slots)
+        # Positions as (3, slots), read and written through the rows' flat indices.
+        position = store.position.reshape(-1)
+        pos = f[AT["p0"]] + f[AT["dp"]] * u_new
         if any_arrived:
-            pos3[:, arrived] = f[AT["p1"]][:, arrived]
-        pos = pos3.T
-        store.velocity[rows] = (pos - old_pos) / dt
-        store.position[rows] = pos
+            pos[:, arrived] = f[AT["p1"]][:, arrived]
+        store.velocity.reshape(-1)[flat] = (pos - position[flat]) / dt
+        position[flat] = pos
         # Orientation work only for segments that rotate (pure translations keep theirs).
         theta = f[AT["theta"]]
         turning = theta > 0.0
         if not np.count_nonzero(turning):
-            store.angular_velocity[rows] = 0.0
+            store.angular_velocity.reshape(-1)[flat] = 0.0
         else:
             t = turning.nonzero()[0]
             ft, un = self._turn_block.take(s[t], axis=1), u_new[t]

@@ -56,7 +56,7 @@ def advance_velocity(
     vel = old + np.clip(command - old, -acc, acc)
     vel = np.clip(vel, -cap, cap)
     mean = 0.5 * (old + vel)
-    yaw = yaw_from_quats(store.orientation[rows])
+    yaw = yaw_from_quats(store.orientation.take(rows, axis=0))
     mid = yaw + 0.5 * mean[:, 3] * dt
     cos, sin = np.cos(mid), np.sin(mid)
     world = np.stack(

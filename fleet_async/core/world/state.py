@@ -42,6 +42,8 @@ class KinematicState:
 
     def __init__(self, capacity: int = 64) -> None:
         capacity = max(int(capacity), 1)
+        # Every column stays one C-ordered array (grown by copying): the kinematic engine
+        # writes positions through flat views of them (column.reshape(-1)).
         self.position = np.zeros((capacity, 3))
         self.orientation = np.zeros((capacity, 4))
         self.orientation[:, 3] = 1.0
