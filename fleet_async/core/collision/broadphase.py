@@ -201,7 +201,7 @@ _COVERS = np.logical_and.reduce(
 def _corner_entries(lo: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(cell key, owner) of every hash entry when no object spans more than two cells along
     an axis: the same entries as :func:`_entries`, in a fixed number of calls."""
-    owner, corner = _COVERS[span @ _SPAN_CODE].nonzero()
+    owner, corner = _COVERS.take(span @ _SPAN_CODE, axis=0).nonzero()
     return (lo @ _WEIGHTS)[owner] + _CORNER_KEYS[corner], owner
 
 
@@ -242,7 +242,7 @@ def _shared_cell_pairs(keys: np.ndarray, owner: np.ndarray | None, moved: np.nda
     # two owners of a pair are never the same object.
     pairs = entries[at] if owner is None else owner[entries[at]]
     flags = moved[pairs]
-    return pairs[flags[:, 0] | flags[:, 1]]
+    return pairs.compress(flags[:, 0] | flags[:, 1], axis=0)  # cheaper than pairs[mask]
 
 
 def _in_shared_slots(keys: np.ndarray) -> np.ndarray:

@@ -84,7 +84,7 @@ class ActivePairs:
         if len(now_rows):
             now_codes = pair_codes(store.object_id[now_rows])
             order = now_codes.argsort()
-            now_codes, now_rows = now_codes[order], now_rows[order]
+            now_codes, now_rows = now_codes[order], now_rows.take(order, axis=0)
         else:
             now_codes = np.empty(0, dtype=np.int64)
         ended = np.empty(0, dtype=np.int64)
@@ -106,16 +106,16 @@ class ActivePairs:
         fresh = ~_member(now_codes, self.codes) if len(now_codes) else None
         if fresh is None or not np.count_nonzero(fresh):
             if keep is not None:
-                self.codes, self.rows = self.codes[keep], self.rows[keep]
+                self.codes, self.rows = self.codes[keep], self.rows.compress(keep, axis=0)
             return ended, np.empty(0, dtype=np.int64)
         started = now_codes[fresh]
         codes, rows = self.codes, self.rows
         if keep is not None:
-            codes, rows = codes[keep], rows[keep]
+            codes, rows = codes[keep], rows.compress(keep, axis=0)
         codes = np.concatenate((codes, started))
-        rows = np.concatenate((rows, now_rows[fresh]))
+        rows = np.concatenate((rows, now_rows.compress(fresh, axis=0)))
         order = codes.argsort()
-        self.codes, self.rows = codes[order], rows[order]
+        self.codes, self.rows = codes[order], rows.take(order, axis=0)
         return ended, started
 
 

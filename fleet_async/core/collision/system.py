@@ -368,7 +368,7 @@ class CollisionSystem:
         touching = self.narrow.touching(row_pairs, store, aabb_checked=aabb_checked)
         if self.sweep and np.count_nonzero(touching) < touching.size:
             self._sweep_test(row_pairs, touching)
-        ended, started = self._active.update(row_pairs[touching], store)
+        ended, started = self._active.update(row_pairs.compress(touching, axis=0), store)
         if self.sweep:
             self._start[moved_rows] = store.position[moved_rows]
         store.moved[: store.high_water] = False  # moved_rows are all the flagged rows: a fill
