@@ -168,9 +168,10 @@ class SlotTable:
         self._moving = None
 
     def _set_mode(self, slot: int, mode: int) -> None:
-        """Change a slot's mode (and forget the cached sets of moving slots)."""
-        self.mode[slot] = mode
-        self._moving = None
+        """Change a slot's mode (and forget the cached sets of moving slots if it changed)."""
+        if self.mode[slot] != mode:
+            self.mode[slot] = mode
+            self._moving = None
 
     def _moving_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(pose slots, their store rows, the rows' flat indices, velocity slots), cached until
