@@ -11,6 +11,7 @@ MissionStalledError, and warns once after a second.
 from __future__ import annotations
 
 import asyncio
+import importlib.util
 import logging
 import math
 import sys
@@ -82,7 +83,18 @@ def run(
             help (without ``until``, and unpaced: with ``target_rtf`` > 0 the clock keeps
             running for the outside world to act).
         MissionStalledError: a mission held the clock longer than ``watchdog``.
+        ValueError: ``backend`` is neither "asyncio" nor "trio".
+        ModuleNotFoundError: ``backend="trio"`` where trio is not installed (the message says
+            how to install it).
     """
+    if backend not in ("asyncio", "trio"):
+        raise ValueError(f'fleet_async.run: backend must be "asyncio" or "trio", got {backend!r}')
+    if backend == "trio" and importlib.util.find_spec("trio") is None:
+        raise ModuleNotFoundError(
+            'fleet_async.run(backend="trio") needs trio, which is not installed: '
+            'pip install "fleet-async[trio]"',
+            name="trio",
+        )
     try:
         return anyio.run(_run_with_kwargs, sim, main, args, until, watchdog, backend=backend)
     except BaseExceptionGroup as group:  # the host loop's own wrapping of a lone Ctrl-C

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import importlib.util
 import itertools
 import sys
 import threading
@@ -531,3 +532,20 @@ def test_misuse_outside_a_run_is_one_error_type():
 
         with pytest.raises(TypeError, match="not SimPy generators"):
             fa.run(sim, generator())
+
+
+def test_an_unknown_or_missing_backend_is_a_clear_error(monkeypatch):
+    with _sim() as sim:
+
+        async def main():
+            await sim.sleep(1.0)
+
+        with pytest.raises(ValueError, match=r'backend must be "asyncio" or "trio", got \'curio\''):
+            fa.run(sim, main, backend="curio")
+        real = importlib.util.find_spec
+        monkeypatch.setattr(
+            importlib.util, "find_spec", lambda name, *a: None if name == "trio" else real(name, *a)
+        )
+        with pytest.raises(ModuleNotFoundError, match=r'pip install "fleet-async\[trio\]"'):
+            fa.run(sim, main, backend="trio")
+        assert sim.step_count == 0  # nothing ran
