@@ -318,3 +318,47 @@ def test_cmd_vel_first_step_moves_half_a_dt_squared(sim):
         sim.step_once()
         xs.append(agent.get_pose().x)
     assert xs == pytest.approx([0.025, 0.1, 0.225, 0.4, 0.6, 0.8])
+
+
+def _arrival_changes(handler_acts: bool):
+    """Robot a completes a move; at that moment velocity robot b is removed, a new robot d
+    takes b's freed engine slot, and idle robot c gets a velocity command: from the action's
+    completion handler (inside the step's motion phase) or, for reference, from outside,
+    before the same step. Returns (d, c, the step of the change, the simulation)."""
+    sim = MultiRobotSimulationCore(headless_params())
+    a = spawn(sim, name="a")
+    b = spawn(sim, xyz=(0.0, 5.0, 0.1), name="b")
+    c = spawn(sim, xyz=(0.0, -5.0, 0.1), name="c")
+    b.set_cmd_vel(1.0, 0.0, 0.0, 0.0)
+    new: list[Agent] = []
+
+    def change() -> None:
+        sim.remove_object(b)
+        new.append(spawn(sim, xyz=(3.0, 3.0, 0.1), name="d"))
+        c.set_cmd_vel(1.0, 0.0, 0.0, 0.0)
+
+    if handler_acts:
+        sim.events.on(
+            "action_completed", lambda agent, **_: change() if agent is a and not new else None
+        )
+    a.add_action(MoveAction(path=Path([Pose.from_xyz(0.5, 0.0, 0.1)])))
+    changed_at = None
+    for step in range(30):
+        if not handler_acts and step == 6:  # the step in which a's move completes
+            change()
+        sim.step_once()
+        if new and changed_at is None:
+            changed_at = step
+    return new[0], c, changed_at, sim
+
+
+def test_modes_changed_by_an_arrivals_callbacks_apply_in_the_same_step():
+    d, c, at, sim = _arrival_changes(handler_acts=True)
+    _, c_ref, at_ref, sim_ref = _arrival_changes(handler_acts=False)
+    assert at == at_ref == 6
+    # d reuses b's slot but not b's velocity command; c starts in the step it was told to.
+    assert d.get_pose().position.tolist() == [3.0, 3.0, 0.1] and not d.is_moving
+    assert c.get_pose().position.tolist() == c_ref.get_pose().position.tolist()
+    assert c.get_pose().x > 2.0
+    sim.close()
+    sim_ref.close()

@@ -96,7 +96,8 @@ def candidate_pairs(
         top = int(span.max())
         if top == 0:  # the common case: every object in one cell
             return _sorted_unique(_shared_cell_pairs(lo @ _WEIGHTS, None, moved), n, False)
-        if top == 1 and n <= _CORNER_MAX:  # small objects, some across a cell edge
+        if top == 1 and n <= _CORNER_MAX and multi_cell_threshold >= 1:
+            # Small objects, some across a cell edge, none big enough to test against all.
             return _sorted_unique(_shared_cell_pairs(*_corner_entries(lo, span), moved), n, True)
         any_big = top > multi_cell_threshold
         big = _max3(span) > multi_cell_threshold if any_big else np.zeros(n, dtype=bool)

@@ -116,6 +116,8 @@ class KinematicEngine(SlotTable):
         self.row[slot] = row
         self.kind[slot] = kind
         self._set_mode(slot, IDLE)
+        self.cmd[slot] = 0.0  # a reused slot starts without its last owner's command
+        self.vel[slot] = 0.0
         self.set_limits(slot, limits)
         self._plans[slot] = None
         return slot
@@ -387,6 +389,9 @@ class KinematicEngine(SlotTable):
         pose_slots, pose_rows, flat, vel_slots = self._moving_slots()
         if len(pose_slots):
             self._advance_pose(pose_slots, pose_rows, flat, dt)
+            # Arrivals ran callbacks (action completion, events) that may have changed modes
+            # or removed agents: take the velocity slots as they are now.
+            vel_slots = self._moving_slots()[3]
         if len(vel_slots):
             self._advance_velocity(vel_slots, dt)
 
