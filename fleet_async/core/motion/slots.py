@@ -2,13 +2,12 @@
 
 Every float column (limits, the segment's poses and profile, velocity commands) lives side by
 side in one matrix and is reached through named views (``table.p0[slot]``), so a step gathers
-what the moving slots need in one call instead of one per column: at 100 robots a step is
-a few dozen numpy calls, and each costs about a microsecond whatever its size. The columns a
+what the moving slots need in one call instead of one per column: at 100 robots a step is a
+few dozen numpy calls, and each costs about a microsecond whatever its size. The columns a
 step reads come first, so the gather copies no more than those, and the matrix is stored a
 column to a row, (k, slots), so each gathered column is contiguous for the arithmetic (both
-count at 10,000 robots). Integer and
-flag columns (store row, controller kind, mode) are arrays of their own. Which slots move is
-cached until a mode changes.
+count at 10,000 robots). Integer and flag columns (store row, controller kind, mode) are
+arrays of their own. Which slots move is cached until a mode changes.
 """
 
 from __future__ import annotations
@@ -21,10 +20,8 @@ __all__ = [
     "AT",
     "COLUMNS",
     "IDLE",
-    "MOVE_END",
     "POSE",
     "PROFILE_AT",
-    "TURN_END",
     "VELOCITY",
     "SlotTable",
     "flat_rows",
@@ -33,7 +30,7 @@ __all__ = [
 IDLE, VELOCITY, POSE = 0, 1, 2  # a slot's mode
 
 # The float columns, name -> width, in their order in the matrix: first what every step of a
-# moving slot reads (MOVE_END), then what a turning one reads too (TURN_END), then the rest.
+# moving slot reads (_MOVE_END), then what a turning one reads too (_TURN_END), then the rest.
 # u: progress along the segment in [0, 1]; steps: steps of the segment taken so far; u_peak:
 # cruise rate of u (1/s); u_t_acc: s spent accelerating (and braking); u_t_end: s the segment
 # takes; theta, axis, sl_*: the rotation and its slerp terms; cmd, vel: body-frame command and
@@ -88,17 +85,13 @@ def _starts() -> dict[str, int]:
 
 _START = _starts()
 _WIDTH = sum(_WIDTHS.values())
-MOVE_END = sum(_MOVE.values())
-"""The matrix's first MOVE_END columns are all a moving slot's step reads."""
-TURN_END = MOVE_END + sum(_TURN.values())
-"""... and the first TURN_END all a turning one reads."""
+_MOVE_END = sum(_MOVE.values())  # the first columns: all a moving slot's step reads
+_TURN_END = _MOVE_END + sum(_TURN.values())  # ... and all a turning one reads
 AT: dict[str, slice | int] = {
     name: start if _WIDTHS[name] == 1 else slice(start, start + _WIDTHS[name])
     for name, start in _START.items()
 }
 """Column name -> its place in the float matrix (an int for a width-1 column)."""
-PROGRESS_AT = slice(_START["u"], _START["steps"] + 1)
-"""u and steps, side by side: a step writes both back in one call."""
 PROFILE_AT = slice(_START[PROFILE_TERMS[0]], _START[PROFILE_TERMS[-1]] + 1)
 """The profile's terms, in trapezoid_progress's order."""
 
@@ -157,8 +150,8 @@ class SlotTable:
             setattr(self, name, floats[place].T)  # (cap, width) views; (cap,) for width 1
         # What a step reads, as blocks to gather with take(slots, axis=1): a C-ordered
         # (columns, slots) copy, so each column the step computes on is contiguous.
-        self._move_block = floats[:MOVE_END]
-        self._turn_block = floats[:TURN_END]
+        self._move_block = floats[:_MOVE_END]
+        self._turn_block = floats[:_TURN_END]
         for name, (dtype, fill) in _OTHERS.items():
             new: np.ndarray = np.full(cap, fill, dtype=dtype)
             old = getattr(self, name, None)
