@@ -120,26 +120,25 @@ async def _force_failure(node: TreeNode, scope: Scope) -> NodeStatus:
     return FAILURE
 
 
-async def _repeat(node: TreeNode, scope: Scope) -> NodeStatus:
-    cycles = int(node.input(scope, "num_cycles"))
-    spin, done = _Spin(node, scope), 0
-    while cycles < 0 or done < cycles:
-        if await _only_child(node, scope) is FAILURE:
-            return FAILURE
-        done += 1
+async def _rerun(node: TreeNode, scope: Scope, port: str, until: NodeStatus) -> NodeStatus:
+    """Run the child up to ``port`` times (-1: forever) or until it returns ``until``; that
+    status then, else the other one (Repeat stops on FAILURE, Retry on SUCCESS)."""
+    limit = int(node.input(scope, port))
+    spin, runs = _Spin(node, scope), 0
+    while limit < 0 or runs < limit:
+        if await _only_child(node, scope) is until:
+            return until
+        runs += 1
         spin.cycle()
-    return SUCCESS
+    return SUCCESS if until is FAILURE else FAILURE
+
+
+async def _repeat(node: TreeNode, scope: Scope) -> NodeStatus:
+    return await _rerun(node, scope, "num_cycles", FAILURE)
 
 
 async def _retry(node: TreeNode, scope: Scope) -> NodeStatus:
-    attempts = int(node.input(scope, "num_attempts"))
-    spin, tried = _Spin(node, scope), 0
-    while attempts < 0 or tried < attempts:
-        if await _only_child(node, scope) is SUCCESS:
-            return SUCCESS
-        tried += 1
-        spin.cycle()
-    return FAILURE
+    return await _rerun(node, scope, "num_attempts", SUCCESS)
 
 
 async def _keep_running(node: TreeNode, scope: Scope) -> NodeStatus:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from fleet_async.core.base.attr_state import AttributeState
 from fleet_async.core.base.config_utils import resolve_class
 
 if TYPE_CHECKING:
@@ -15,7 +16,7 @@ if TYPE_CHECKING:
 __all__ = ["AGENT_PLUGIN_REGISTRY", "AgentPlugin", "BatteryPlugin", "create_agent_plugin"]
 
 
-class AgentPlugin:
+class AgentPlugin(AttributeState):
     """Base class of per-agent plugins.
 
     Args:
@@ -32,16 +33,6 @@ class AgentPlugin:
 
     def on_remove(self) -> None:
         """Called when the plugin is removed or its agent leaves the simulation."""
-
-    def get_state(self) -> dict[str, Any]:
-        """What ``sim.save_state`` keeps of this plugin: its attributes (objects of the
-        simulation are saved by id). Override both methods if some attribute cannot be pickled
-        or must not be restored."""
-        return dict(vars(self))
-
-    def set_state(self, state: dict[str, Any]) -> None:
-        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
-        vars(self).update(state)
 
 
 class BatteryPlugin(AgentPlugin):

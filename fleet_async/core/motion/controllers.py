@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from fleet_async.core.base.attr_state import AttributeState
 from fleet_async.core.base.config_utils import resolve_class
 from fleet_async.core.base.types import MotionMode, MovementDirection, coerce_enum
 from fleet_async.core.geometry.pose import Pose
@@ -90,7 +91,7 @@ class ControllerParams:
         return tuple(f.name for f in fields(cls))
 
 
-class Controller:
+class Controller(AttributeState):
     """Base class of every controller.
 
     Subclass it for high-level behaviour and override :meth:`compute`, which the simulation
@@ -108,16 +109,6 @@ class Controller:
 
     def compute(self, agent: Agent, dt: float) -> None:
         """Advance this controller for one step of ``dt`` seconds."""
-
-    def get_state(self) -> dict[str, Any]:
-        """What ``sim.save_state`` keeps of this controller: its attributes (objects of the
-        simulation are saved by id). Override both methods if some attribute cannot be pickled
-        or must not be restored."""
-        return dict(vars(self))
-
-    def set_state(self, state: dict[str, Any]) -> None:
-        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
-        vars(self).update(state)
 
     @property
     def is_base(self) -> bool:

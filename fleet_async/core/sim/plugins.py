@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from fleet_async.core.base.attr_state import AttributeState
+
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["SimPlugin", "as_plugin"]
 
 
-class SimPlugin:
+class SimPlugin(AttributeState):
     """Base class for simulation plugins.
 
     Register with ``sim.register_plugin(MyPlugin, config={...}, frequency=2.0)``. The simulation
@@ -42,16 +44,6 @@ class SimPlugin:
 
     def on_reset(self) -> None:
         """Called after ``sim.reset()`` has cleared the world."""
-
-    def get_state(self) -> dict[str, Any]:
-        """What ``sim.save_state`` keeps of this plugin: its attributes (objects of the
-        simulation are saved by id). Override both methods if some attribute cannot be pickled
-        or must not be restored."""
-        return dict(vars(self))
-
-    def set_state(self, state: dict[str, Any]) -> None:
-        """Take back what :meth:`get_state` returned (``sim.restore_state``)."""
-        vars(self).update(state)
 
 
 def as_plugin(

@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet as p
@@ -146,18 +146,22 @@ class World(Carrying, PendingBodiesApi):
         if len(self._dynamic_rows):
             self._backend.read_back(self._store, self._dynamic_rows)
 
-    def clear(self) -> list[SimObject]:
-        """Unbind and forget every object (the PyBullet world is reset by the caller)."""
-        removed = list(self._objects.values())
-        for obj in removed:
-            obj.unbind()
-        for registry in (
+    def _registries(self) -> tuple[dict[int, Any], ...]:
+        """Every object-id index of the world (an object is in some of them)."""
+        return (
             self._objects,
             self._agents,
             self._updaters,
             self._with_callbacks,
             self._update_listeners,
-        ):
+        )
+
+    def clear(self) -> list[SimObject]:
+        """Unbind and forget every object (the PyBullet world is reset by the caller)."""
+        removed = list(self._objects.values())
+        for obj in removed:
+            obj.unbind()
+        for registry in self._registries():
             registry.clear()
         self._attachments.clear()
         self._pending.clear()
@@ -261,13 +265,7 @@ class World(Carrying, PendingBodiesApi):
             self.detach(obj, child, None, None)
         obj.on_removed()
         object_id, row = obj.object_id, obj.state_row
-        for registry in (
-            self._objects,
-            self._agents,
-            self._updaters,
-            self._with_callbacks,
-            self._update_listeners,
-        ):
+        for registry in self._registries():
             registry.pop(object_id, None)
         self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
         if obj.raw_body_id == PENDING_BODY:
