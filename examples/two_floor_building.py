@@ -20,6 +20,7 @@ ingestor serve one courier at a time, and everything happens in sim time.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 from pathlib import Path
 from typing import TypeVar
 
@@ -169,6 +170,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--gui", action="store_true", help="open the PyBullet window")
     args = parser.parse_args(argv)
+    if args.backend == "trio" and importlib.util.find_spec("trio") is None:
+        parser.error('--backend trio needs trio: pip install "fleet-async[trio]"')
 
     sim, couriers = build(args.gui)
     with sim:

@@ -20,6 +20,7 @@ the run is deterministic and much faster than real time.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -165,6 +166,8 @@ def main(argv: list[str] | None = None) -> int:
         "--gui", action="store_true", help="open the PyBullet window (needs a display)"
     )
     args = parser.parse_args(argv)
+    if args.backend == "trio" and importlib.util.find_spec("trio") is None:
+        parser.error('--backend trio needs trio: pip install "fleet-async[trio]"')
 
     with build(args.gui) as sim:
         tally = fa.run(
