@@ -77,7 +77,8 @@ def test_entries_resolve_beside_the_scenario_with_their_arguments(scenario_dir, 
         assert rest.name == "idle"
         outcome = run_scenario(sim)
     assert outcome.stopped == "done"
-    assert outcome.results == {"go": pytest.approx(outcome.results["go"]), "idle": "rested"}
+    # drive(2.0, "fast"): 2 m at 1 m/s (5 m/s^2): 0.2 s ramping up, 2 s in all, ends at 2.2 s
+    assert outcome.results == {"go": pytest.approx(2.2), "idle": "rested"}
     assert capsys.readouterr().out == f"r0 arrived at t={outcome.results['go']:.1f} fast\n"
 
 

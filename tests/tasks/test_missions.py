@@ -421,7 +421,9 @@ def test_holding_the_clock_warns_once_naming_the_culprits(backend, monkeypatch):
     with _sim() as sim:
 
         async def main():
-            await anyio.sleep(0.3)  # wall clock: holds the sim clock meanwhile
+            # Wall clock on purpose: the watchdog looks every 0.25 s, so 0.6 s of holding
+            # spans at least two of its looks.
+            await anyio.sleep(0.6)
             await sim.sleep(0.1)
             return sim.step_count
 
