@@ -46,6 +46,10 @@ _wall_sleep = anyio.sleep
 _YIELD_EVERY = 0.05
 """Wall seconds between the driver's checkpoints on the host loop when it is not paced, so
 other tasks of the host loop (a live viewer, a server) keep running."""
+_JUMP_LIMIT_S = 3600.0
+"""Sim seconds the driver jumps at most in one go when no mission event is due (missions
+waiting on actions only): idle_steps knows the actions' timers, and a run in which nothing at
+all can happen still moves in bounded jumps."""
 _WARN_AFTER = 1.0
 """Wall seconds a mission may hold the clock before one warning says so."""
 
@@ -231,17 +235,16 @@ class _Driver:
         between jumps."""
         runtime, kernel, sim = self.runtime, self.runtime.kernel, self.runtime.sim
         gap = kernel.steps_to_next()
+        if gap is None:  # missions wait on actions only: the simulation knows their timers
+            gap = max(1, int(_JUMP_LIMIT_S / sim.params.timestep))
         if self.until_step is not None:
             left = self.until_step - kernel.now
-            gap = left if gap is None else min(gap, left)
+            gap = min(gap, left)
         rtf = sim.params.target_rtf
-        if gap is not None and rtf > 0:  # paced: jump no further than the outside world waits
+        if rtf > 0:  # paced: jump no further than the outside world waits
             gap = min(gap, max(1, int(_YIELD_EVERY * rtf / sim.params.timestep)))
-        if gap is not None and gap > 0 and not runtime.watches_predicates():
-            skipped = sim.skip_idle_steps(gap)
-        else:
-            skipped = 0
-        if skipped:
+        skippable = gap > 0 and not runtime.watches_predicates()
+        if skippable and sim.skip_idle_steps(gap):
             kernel.now = sim.step_count
             return
         runtime.step()

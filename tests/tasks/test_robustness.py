@@ -549,3 +549,28 @@ def test_an_unknown_or_missing_backend_is_a_clear_error(monkeypatch):
         with pytest.raises(ModuleNotFoundError, match=r'pip install "fleet-async\[trio\]"'):
             fa.run(sim, main, backend="trio")
         assert sim.step_count == 0  # nothing ran
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_missions_waiting_on_actions_only_skip_the_empty_steps(backend, monkeypatch):
+    # No mission event is due while the robot waits 100 s in a WaitAction: the driver asks the
+    # simulation (which knows the action's timer) and jumps, with the same result and clock.
+    with _sim(dt=0.1) as sim:
+        robot = _robot(sim)
+        calls = 0
+        step_once = sim.step_once
+
+        def counted(*args, **kwargs):
+            nonlocal calls
+            calls += 1
+            return step_once(*args, **kwargs)
+
+        monkeypatch.setattr(sim, "step_once", counted)
+
+        async def main():
+            await robot.wait(100.0)
+            return sim.sim_time
+
+        assert fa.run(sim, main, backend=backend) == pytest.approx(100.0)
+        assert sim.step_count == 1000
+        assert calls < 10  # about 1,000 before
