@@ -704,7 +704,7 @@ def test_view_rejects_a_cut_trace_naming_file_problem_and_version(script, scenar
     result = cli(script, "view", cut, "--no-browser")
     assert result.returncode == 2
     line = error_line(result.stderr)
-    assert str(cut) in line and "truncated" in line and "version 1" in line
+    assert str(cut) in line and "truncated" in line and "versions 1 and 2" in line
     result = cli(script, "view", tmp_path / "missing.fatrace", "--no-browser")
     assert result.returncode == 2 and "no such trace file" in error_line(result.stderr)
 

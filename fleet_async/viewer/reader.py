@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from fleet_async.core.view.trace.format import (
-    FORMAT_VERSION,
+    READABLE_VERSIONS,
     HEADER,
     MAGIC,
     RECORD,
@@ -90,6 +90,9 @@ class TraceReader:
         self.shapes: list[dict[str, Any]] = []
         self.bodies: dict[int, dict[str, Any]] = {}
         self.events: list[dict[str, Any]] = []
+        self.commands: list[dict[str, Any]] = []
+        """Fleet masters' commands: ``step`` (the step count when applied), ``vehicle``,
+        ``command`` (JSON data, ``fleet_async.interfaces.command_from_json`` reads it)."""
         self.end: dict[str, Any] | None = None
         self._chunks: list[_Chunk] = []
         self._collisions: list[tuple[np.ndarray, ...]] = []
@@ -102,8 +105,8 @@ class TraceReader:
     def _error(self, problem: str, version: int | None = None) -> TraceFormatError:
         found = f"the file's format version is {version}; " if version is not None else ""
         return TraceFormatError(
-            f"{self.path}: {problem} ({found}this fleet_async reads trace format version "
-            f"{FORMAT_VERSION})"
+            f"{self.path}: {problem} ({found}this fleet_async reads trace format versions "
+            f"{' and '.join(map(str, READABLE_VERSIONS))})"
         )
 
     def _read_header(self) -> int:
@@ -120,7 +123,7 @@ class TraceReader:
             raise self._error(
                 f"not a fleet_async trace (magic bytes {magic!r}, expected {MAGIC!r})"
             )
-        if version != FORMAT_VERSION:
+        if version not in READABLE_VERSIONS:
             raise self._error(f"unsupported trace format version {version}", version)
         if header_size < HEADER.size:
             raise self._error(f"bad header size {header_size}", version)
@@ -197,6 +200,9 @@ class TraceReader:
             )
             started = np.frombuffer(data, dtype=np.uint8, count=n, offset=at + 12 * n)
             self._collisions.append((steps, a, b, started))
+        elif kind == RecordKind.COMMANDS:
+            for step, vehicle, command in self._json(start, length)["commands"]:
+                self.commands.append({"step": step, "vehicle": vehicle, "command": command})
         elif kind == RecordKind.END:
             self.end = self._json(start, length)
         return layout

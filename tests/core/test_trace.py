@@ -281,7 +281,7 @@ def test_truncated_file_names_file_problem_and_version(small_trace, tmp_path):
     with pytest.raises(TraceFormatError) as err:
         TraceReader(cut)
     message = str(err.value)
-    assert str(cut) in message and "truncated" in message and "version 1" in message
+    assert str(cut) in message and "truncated" in message and "versions 1 and 2" in message
     cut.write_bytes(data[:10])
     with pytest.raises(TraceFormatError, match="shorter than the 16-byte header"):
         TraceReader(cut)
@@ -306,7 +306,7 @@ def test_other_version_and_not_a_trace(small_trace, tmp_path):
     other.write_bytes(bytes(data))
     with pytest.raises(TraceFormatError) as err:
         TraceReader(other)
-    assert "format version is 99" in str(err.value) and "reads trace format version 1" in str(
+    assert "format version is 99" in str(err.value) and "reads trace format versions 1 and 2" in str(
         err.value
     )
     junk = tmp_path / "junk.fatrace"

@@ -139,7 +139,7 @@ def test_truncated_trace_shows_an_error_naming_file_and_version(
     page.wait_for_function(READY, timeout=60_000)
     assert page.get_attribute("#app", "data-state") == "error"
     message = page.inner_text("#error")
-    assert "cut.fatrace" in message and "truncated" in message and "version 1" in message
+    assert "cut.fatrace" in message and "truncated" in message and "versions 1 and 2" in message
 
 
 def test_stacked_robots_get_a_count_and_devices_are_not_counted_as_robots(

@@ -14,6 +14,7 @@ Agents without high-level controllers or plugins cost nothing in steps 2 and 4.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.actions.action_queue import ActionQueue
@@ -55,6 +56,23 @@ class FleetMotion:
         slot = self.engine.add(agent.state_row, kind, limits)
         self._slot_agent[slot] = agent
         return slot
+
+    def cap_speed(self, agent: Agent, max_speed: float | None) -> None:
+        """Cap ``agent``'s linear speed at ``max_speed`` m/s (None: back to its own limit).
+
+        Applies from the agent's next path segment (set it before ``set_path``), as an order's
+        speed limit on an edge does.
+        """
+        limits = agent.controller_params.limits()
+        if max_speed is not None:
+            vmax = limits.max_linear_vel
+            capped: float | tuple[float, float, float] = (
+                min(vmax, max_speed)
+                if isinstance(vmax, float)
+                else (min(vmax[0], max_speed), min(vmax[1], max_speed), min(vmax[2], max_speed))
+            )
+            limits = replace(limits, max_linear_vel=capped)
+        self.engine.set_limits(agent.motion_slot, limits)
 
     def remove_slot(self, slot: int) -> None:
         """Release an engine slot."""

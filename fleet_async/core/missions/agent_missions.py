@@ -19,7 +19,7 @@ from fleet_async.core.actions.arm_actions import JointAction, PoseAction
 from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
-from fleet_async.core.missions.errors import NoMissionRuntimeError
+from fleet_async.core.missions.errors import ExternallyDrivenError, NoMissionRuntimeError
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -33,9 +33,21 @@ class AgentMissionApi:
     ``move_joints``, ``reach_pose``, ``submit``. Each queues its action when called and
     returns an event for it."""
 
+    external_driver: str | None = None
+    """Who drives this agent from outside the simulation (a served fleet's master), or None.
+
+    While set, mission commands to the agent are refused: two drivers would fight over its
+    action queue. Set by a fleet interface (``fleet_async.interfaces``) when it serves the agent.
+    """
+
     def _mission_runtime(self, what: str) -> MissionRuntime:
         agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
         agent.check_not_removed(what)  # "needs a running mission" would mislead
+        if self.external_driver is not None:
+            raise ExternallyDrivenError(
+                f"{what}: {agent.name!r} is driven by {self.external_driver}; a mission cannot "
+                "command it (leave it out of the served robots to drive it from a mission)"
+            )
         sim = agent.sim_core
         runtime = None if sim is None else sim.mission_runtime
         if runtime is None:

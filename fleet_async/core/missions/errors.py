@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["MissionError", "NoMissionRuntimeError"]
+__all__ = ["ExternallyDrivenError", "MissionError", "NoMissionRuntimeError"]
 
 
 class MissionError(Exception):
@@ -12,3 +12,7 @@ class MissionError(Exception):
 class NoMissionRuntimeError(MissionError, RuntimeError):
     """A sim-time await was used outside a mission started by ``fleet_async.run`` (no run in
     progress, another thread, or a plain task of the host loop)."""
+
+
+class ExternallyDrivenError(MissionError, RuntimeError):
+    """A mission commanded an agent that another process drives (a served fleet's master)."""

@@ -6,7 +6,7 @@
 "use strict";
 
 const TRACE_MAGIC = "FLEETTRC";
-const TRACE_VERSION = 1;
+const TRACE_VERSIONS = [1, 2];  // 2 added COMMANDS (kind 8), which the page skips
 const HEADER_SIZE = 16;
 const RECORD_HEADER = 8;
 const KIND = { META: 1, BODIES: 2, LAYOUT: 3, FRAMES: 4, EVENTS: 5, COLLISIONS: 6, END: 7 };
@@ -70,7 +70,7 @@ class TraceDecoder {
     const v = this.data.version;
     const found = v !== null ? `the file's format version is ${v}; ` : "";
     return new TraceFormatError(
-      `${this.data.name}: ${problem} (${found}this viewer reads trace format version ${TRACE_VERSION})`);
+      `${this.data.name}: ${problem} (${found}this viewer reads trace format versions ${TRACE_VERSIONS.join(" and ")})`);
   }
 
   // Copy the first n pending bytes into a fresh ArrayBuffer (aligned) and drop them.
@@ -122,7 +122,7 @@ class TraceDecoder {
       const dv = new DataView(h.buffer);
       if (magic !== TRACE_MAGIC) throw this.error(`not a fleet_async trace (magic bytes ${JSON.stringify(magic)})`);
       this.data.version = dv.getUint16(8, true);
-      if (this.data.version !== TRACE_VERSION) throw this.error(`unsupported trace format version ${this.data.version}`);
+      if (!TRACE_VERSIONS.includes(this.data.version)) throw this.error(`unsupported trace format version ${this.data.version}`);
       const headerSize = dv.getUint16(10, true);
       if (headerSize > HEADER_SIZE) {
         if (this.pendingBytes < headerSize - HEADER_SIZE) throw this.error("truncated header");

@@ -53,6 +53,7 @@ class TraceEventLog:
         # Collisions arrive by the hundred per step at fleet scale: the collision system hands
         # over each check's (K, 2) arrays of pairs in one call; they are joined at flush time.
         self._collisions: list[tuple[int, np.ndarray, np.ndarray]] = []
+        self._commands: list[list[Any]] = []
         self._failed: set[int] = set()
         self.flag_version = 0
         """Bumped whenever the set of failed bodies changes (the writer caches flag masks)."""
@@ -139,6 +140,11 @@ class TraceEventLog:
             data = {"mission": mission, "error": type(leaf).__name__, "message": str(leaf)}
             self.event("mission_error", getattr(holder, "object_id", None), **data)
 
+    def command(self, step: int, vehicle: str, command: Any) -> None:
+        """A fleet master's command, applied to ``vehicle`` at the boundary before ``step``
+        ran (``step`` = the step count then); ``command`` is its JSON data."""
+        self._commands.append([int(step), str(vehicle), command])
+
     # ----- collisions -----------------------------------------------------------------------
 
     def _on_collisions(self, ended: np.ndarray, started: np.ndarray) -> None:
@@ -155,6 +161,9 @@ class TraceEventLog:
         if self._collisions:
             records.append((RecordKind.COLLISIONS, self._collision_parts()))
             self._collisions = []
+        if self._commands:
+            records.append((RecordKind.COMMANDS, [json_bytes({"commands": self._commands})]))
+            self._commands = []
         return records
 
     def _collision_parts(self) -> list[Any]:

@@ -25,6 +25,7 @@ __all__ = [
     "FRAMES_HEADER",
     "HEADER",
     "MAGIC",
+    "READABLE_VERSIONS",
     "RECORD",
     "YAW_SCALE",
     "RecordKind",
@@ -33,8 +34,10 @@ __all__ = [
 
 MAGIC = b"FLEETTRC"
 """First 8 bytes of every trace file."""
-FORMAT_VERSION = 1
-"""Version of the file format this package writes (and the only one the readers accept)."""
+FORMAT_VERSION = 2
+"""Version of the file format this package writes."""
+READABLE_VERSIONS = (1, 2)
+"""Versions the readers accept (2 added the COMMANDS record; a version 1 file has none)."""
 HEADER = struct.Struct("<8sHHI")
 """File header: magic, format version, header size in bytes (16), reserved (0)."""
 RECORD = struct.Struct("<II")
@@ -64,6 +67,7 @@ class RecordKind(IntEnum):
     EVENTS = 5
     COLLISIONS = 6
     END = 7
+    COMMANDS = 8
 
 
 def padding(n: int) -> int:

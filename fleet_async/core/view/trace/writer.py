@@ -225,6 +225,11 @@ class TraceWriter:
         """
         self._log.event(kind, object_id, **data)
 
+    def command(self, step: int, vehicle: str, command: Any) -> None:
+        """Record a fleet master's command (JSON data) applied to ``vehicle`` at the step
+        boundary where the step count was ``step``: a replay applies it there again."""
+        self._log.command(step, vehicle, command)
+
     def _on_spawned(self, obj: Any, **_: Any) -> None:
         self._new_bodies.append(obj)
         self._layout_dirty = True

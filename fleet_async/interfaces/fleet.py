@@ -1,0 +1,236 @@
+"""The fleet interface: robots served to masters in other processes, at step boundaries.
+
+A :class:`FleetInterface` makes some robots of a simulation *served vehicles*. Commands
+(:mod:`~fleet_async.interfaces.commands`) arrive from any thread at any wall-clock moment
+through :meth:`FleetInterface.submit`; they wait in an inbox and are applied at the next step
+boundary (the simulation's PRE_STEP), in arrival order, then each vehicle follows up on what it
+is doing. A traced run records every applied command with its step, so
+:func:`replay_commands` reproduces the run with no network at all.
+
+What the vehicles report goes to listeners (:class:`FleetListener`), called on the simulation's
+thread at the step boundary with immutable snapshots: a state when something the master must
+hear of happened (never for a pose change alone) and at least every ``state_period`` s of sim
+time; a visualization snapshot every ``visualization_period`` s. A listener that talks to a
+network only hands the snapshot over (a transport's own thread publishes it), so a step never
+waits for a network.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from collections import defaultdict, deque
+from collections.abc import Iterable, Sequence
+from typing import Any, Protocol
+
+from fleet_async.core.base.events import SimEvents
+from fleet_async.interfaces.commands import Command, command_from_json
+from fleet_async.interfaces.snapshot import VehicleSnapshot
+from fleet_async.interfaces.vehicle import Vehicle
+
+__all__ = ["FleetInterface", "FleetListener", "replay_commands"]
+
+logger = logging.getLogger(__name__)
+
+
+class FleetListener(Protocol):
+    """Hears what served vehicles report (a transport, a test, a log)."""
+
+    def on_state(self, snapshot: VehicleSnapshot, reasons: tuple[str, ...]) -> None:
+        """A state to report: ``reasons`` says why (``("periodic",)`` for the timer)."""
+
+    def on_visualization(self, snapshot: VehicleSnapshot) -> None:
+        """A pose update at the visualization rate."""
+
+    def on_factsheet_request(self, vehicle: str) -> None:
+        """The master asked for ``vehicle``'s description."""
+
+
+def _steps(seconds: float, timestep: float) -> int:
+    return max(1, math.ceil(seconds / timestep - 1e-9))
+
+
+class FleetInterface:
+    """Serve ``robots`` of ``sim`` to fleet masters.
+
+    Args:
+        sim: The simulation (a ``MultiRobotSimulationCore``).
+        robots: Names of the robots to serve (default: every agent). Each must name exactly
+            one agent.
+        state_period: s of sim time between states when nothing happens (<= 30 s, as fleet
+            protocols ask).
+        visualization_period: s of sim time between visualization snapshots (0: none).
+        deviation_xy: m within which a node counts as reached when an order does not say.
+        driver: Who drives the robots, for the error a mission gets if it commands one.
+
+    Raises:
+        ValueError: for an unknown or ambiguous robot name, or a period out of range.
+    """
+
+    def __init__(
+        self,
+        sim: Any,
+        robots: Sequence[str] | None = None,
+        *,
+        state_period: float = 30.0,
+        visualization_period: float = 0.1,
+        deviation_xy: float = 0.5,
+        driver: str = "a fleet master (fleet interface)",
+    ) -> None:
+        if not 0 < state_period <= 30.0:
+            raise ValueError(
+                f"FleetInterface.state_period: expected a number in (0, 30] s, got {state_period!r}"
+            )
+        if not visualization_period >= 0:
+            raise ValueError(
+                "FleetInterface.visualization_period: expected a number >= 0 s, "
+                f"got {visualization_period!r}"
+            )
+        self.sim = sim
+        dt = sim.params.timestep
+        self._state_every = _steps(state_period, dt)
+        self._viz_every = _steps(visualization_period, dt) if visualization_period > 0 else 0
+        self.vehicles: dict[str, Vehicle] = {}
+        self._reasons: dict[str, list[str]] = defaultdict(list)
+        for agent in self._select(sim, robots):
+            vehicle = Vehicle(agent, sim, deviation_xy, self._change_hook(agent.name))
+            agent.external_driver = driver
+            self.vehicles[agent.name] = vehicle
+        self._inbox: deque[tuple[str, Command]] = deque()
+        self._lock = threading.Lock()
+        self._scheduled: dict[int, list[tuple[str, Command]]] = defaultdict(list)
+        self._listeners: list[FleetListener] = []
+        self._closed = False
+        sim.events.on(SimEvents.PRE_STEP, self._on_pre_step)
+
+    @staticmethod
+    def _select(sim: Any, robots: Sequence[str] | None) -> list[Any]:
+        agents = list(sim.agents)
+        if robots is None:
+            return agents
+        by_name: dict[str, list[Any]] = defaultdict(list)
+        for agent in agents:
+            by_name[agent.name].append(agent)
+        chosen = []
+        for name in robots:
+            found = by_name.get(name, [])
+            if len(found) != 1:
+                problem = "no robot" if not found else f"{len(found)} robots"
+                known = ", ".join(sorted(by_name)[:20])
+                raise ValueError(
+                    f"FleetInterface.robots: {name!r} names {problem} (robots: {known})"
+                )
+            chosen.append(found[0])
+        return chosen
+
+    def _change_hook(self, name: str) -> Any:
+        reasons = self._reasons[name]
+        return reasons.append
+
+    # ----- the master's side ------------------------------------------------------------------
+
+    def submit(self, vehicle: str, command: Command) -> None:
+        """Queue ``command`` for ``vehicle``; it is applied at the next step boundary.
+
+        Safe to call from any thread (a transport's network thread).
+
+        Raises:
+            KeyError: for a vehicle this interface does not serve.
+        """
+        if vehicle not in self.vehicles:
+            raise KeyError(f"FleetInterface.submit: {vehicle!r} is not a served vehicle")
+        with self._lock:
+            self._inbox.append((vehicle, command))
+
+    def schedule(self, step: int, vehicle: str, command: Command) -> None:
+        """Apply ``command`` at the boundary where the step count is ``step`` (a replay)."""
+        if vehicle not in self.vehicles:
+            raise KeyError(f"FleetInterface.schedule: {vehicle!r} is not a served vehicle")
+        self._scheduled[int(step)].append((vehicle, command))
+
+    def add_listener(self, listener: FleetListener) -> None:
+        """Report to ``listener`` from now on."""
+        self._listeners.append(listener)
+
+    def remove_listener(self, listener: FleetListener) -> None:
+        """Stop reporting to ``listener``."""
+        if listener in self._listeners:
+            self._listeners.remove(listener)
+
+    def snapshot(self, vehicle: str) -> VehicleSnapshot:
+        """``vehicle``'s state now."""
+        return self.vehicles[vehicle].snapshot()
+
+    def close(self) -> None:
+        """Stop serving: the robots may be driven by missions again."""
+        if self._closed:
+            return
+        self._closed = True
+        self.sim.events.off(SimEvents.PRE_STEP, self._on_pre_step)
+        for vehicle in self.vehicles.values():
+            vehicle.agent.external_driver = None
+
+    # ----- the step boundary ----------------------------------------------------------------
+
+    def _on_pre_step(self, step: int, **_: Any) -> None:
+        with self._lock:
+            arrived = list(self._inbox)
+            self._inbox.clear()
+        due = self._scheduled.pop(step, [])
+        tracer = self.sim.tracer
+        for name, command in (*due, *arrived):
+            if tracer is not None:
+                tracer.command(step, name, command.to_json())
+            self.vehicles[name].apply(command)
+        for vehicle in self.vehicles.values():
+            vehicle.advance()
+        self._report(step)
+
+    def _report(self, step: int) -> None:
+        periodic = step % self._state_every == 0
+        visual = self._viz_every and step % self._viz_every == 0
+        if not (self._listeners and (periodic or visual or any(self._reasons.values()))):
+            for reasons in self._reasons.values():
+                reasons.clear()
+            return
+        for name, vehicle in self.vehicles.items():
+            reasons = self._reasons[name]
+            if not (reasons or periodic or visual):
+                continue
+            snap = vehicle.snapshot()
+            if reasons or periodic:
+                why = tuple(dict.fromkeys(reasons)) if reasons else ("periodic",)
+                for listener in self._listeners:
+                    listener.on_state(snap, why)
+                if vehicle.factsheet_requested:
+                    vehicle.factsheet_requested = False
+                    for listener in self._listeners:
+                        listener.on_factsheet_request(name)
+            if visual:
+                for listener in self._listeners:
+                    listener.on_visualization(snap)
+            reasons.clear()
+
+
+def replay_commands(sim: Any, trace: Any, robots: Iterable[str] | None = None) -> FleetInterface:
+    """Serve ``sim``'s robots with the commands a trace recorded, at their steps.
+
+    Args:
+        sim: A simulation built as the traced one was, at step 0.
+        trace: A ``fleet_async.viewer.TraceReader`` or a trace's path.
+        robots: The served robots (default: every vehicle the trace names).
+
+    Returns:
+        The fleet interface, with every command scheduled: step the simulation as before.
+    """
+    if not hasattr(trace, "commands"):
+        from fleet_async.viewer.reader import TraceReader
+
+        trace = TraceReader(trace)
+    records = list(trace.commands)
+    names = list(robots) if robots is not None else sorted({r["vehicle"] for r in records})
+    fleet = FleetInterface(sim, names)
+    for record in records:
+        fleet.schedule(record["step"], record["vehicle"], command_from_json(record["command"]))
+    return fleet
