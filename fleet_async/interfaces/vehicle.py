@@ -97,6 +97,7 @@ class Vehicle:
         self.order_update = 0
         self.last_node_id = ""
         self.last_node_sequence = 0
+        self.map_id: str | None = None  # the map of the last node reached (or initPosition)
         self._nodes: deque[Node] = deque()  # still to reach (base, then horizon)
         self._edges: deque[Edge] = deque()  # still to drive
         self._tasks: dict[str, list[Any]] = {}  # task_id -> [Task, TaskStatus, description]
@@ -364,6 +365,8 @@ class Vehicle:
         self._last_xy = (x, y)
         self.last_node_id = str(p.get("last_node_id", ""))
         self.last_node_sequence = 0
+        if p.get("map_id"):
+            self.map_id = str(p["map_id"])
         self._notify("position_initialized")
         return None
 
@@ -427,6 +430,7 @@ class Vehicle:
         if self._edges and self._edges[0].sequence < node.sequence:
             self._edges.popleft()
         self.last_node_id, self.last_node_sequence = node.node_id, node.sequence
+        self.map_id = node.map_id or self.map_id
         self._distance = 0.0
         self._pending.extend(node.tasks)
         self._notify("node_reached")

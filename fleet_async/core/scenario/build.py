@@ -32,6 +32,7 @@ import inspect
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path as FsPath
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.base.config_utils import load_yaml_config, register_class, resolve_class
@@ -77,6 +78,7 @@ SCENARIO_SECTIONS = (
     "plugins",
     "missions",
     "trace",
+    "serve",
 )
 """Top-level sections of the nested layout."""
 
@@ -113,6 +115,10 @@ class ScenarioApi:
     scenario_missions: tuple[MissionSpec, ...] = ()
     """The missions the scenario names (its ``missions:`` section), resolved; empty for a
     simulation not built from a scenario. ``fleet_async.run_scenario(sim)`` runs them."""
+
+    scenario_serve: Mapping[str, Any] = MappingProxyType({})
+    """The scenario's ``serve:`` section (which robots ``fleet-async serve`` serves to fleet
+    masters, and how), as written; ``fleet_async.interfaces`` reads and checks it."""
 
     @classmethod
     def from_dict(
@@ -236,6 +242,7 @@ def _build(
             register_entity_class(name, path)
     sim = factory(params)
     sim.scenario_missions = tuple(missions)
+    sim.scenario_serve = MappingProxyType(dict(_section(config, "serve", dict, where)))
     try:
         declared = _create_managers(sim, managers, where)
         if world:
