@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from fleet_async.core.view.trace.format import (
-    READABLE_VERSIONS,
     HEADER,
     MAGIC,
+    READABLE_VERSIONS,
     RECORD,
     YAW_SCALE,
     RecordKind,

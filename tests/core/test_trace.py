@@ -306,9 +306,9 @@ def test_other_version_and_not_a_trace(small_trace, tmp_path):
     other.write_bytes(bytes(data))
     with pytest.raises(TraceFormatError) as err:
         TraceReader(other)
-    assert "format version is 99" in str(err.value) and "reads trace format versions 1 and 2" in str(
+    assert "format version is 99" in str(
         err.value
-    )
+    ) and "reads trace format versions 1 and 2" in str(err.value)
     junk = tmp_path / "junk.fatrace"
     junk.write_bytes(b"hello world, this is not a trace at all")
     with pytest.raises(TraceFormatError, match="not a fleet_async trace"):
