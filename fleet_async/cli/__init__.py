@@ -1,8 +1,8 @@
 """The ``fleet-async`` command: run scenarios, sweep them, try the examples, replay traces,
-benchmark.
+serve a fleet to fleet software, benchmark.
 
 ``main`` parses the command line and hands it to the subcommand's module (``run``,
-``sweep``, ``examples``, ``view``; ``bench`` is :mod:`fleet_async.bench`). A subcommand
+``sweep``, ``examples``, ``view``, ``serve``; ``bench`` is :mod:`fleet_async.bench`). A subcommand
 reports a problem the user can fix by raising :class:`CliError`, which ``main`` prints as
 ``fleet-async: error: <message>`` (no traceback) with the error's exit code.
 
@@ -38,6 +38,8 @@ subcommands:
   examples  list the bundled examples (the default), run one, or copy them into a folder
   view      replay a trace (recorded with 'run --trace' or sim.start_trace) in the browser
             viewer: top-down, play / pause / speed / scrub, click a robot for its events
+  serve     serve a scenario's robots as VDA 5050 vehicles over MQTT to your fleet
+            software (a master control), paced at real time, until Ctrl-C
   bench     run the fleet-scale benchmark: step time, real-time factor, spawn time and
             memory per agent for fleets of N robots
 
@@ -152,6 +154,20 @@ def _add_view(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -
     parser.set_defaults(handler=view.execute)
 
 
+def _add_serve(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from fleet_async.cli import serve
+
+    parser = subparsers.add_parser(
+        "serve",
+        description=_plain((serve.__doc__ or "").strip()),
+        epilog=serve.EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        parents=[_common_options(argparse.SUPPRESS)],
+    )
+    serve.add_arguments(parser)
+    parser.set_defaults(handler=serve.execute)
+
+
 def _run_bench(args: argparse.Namespace) -> int:
     from fleet_async import bench
 
@@ -199,13 +215,14 @@ def build_parser() -> argparse.ArgumentParser:
         title="commands",
         dest="command",
         metavar="COMMAND",
-        help="run, sweep, examples, view or bench (see above)",
+        help="run, sweep, examples, view, serve or bench (see above)",
     )
     subparsers.required = True
     _add_run(subparsers)
     _add_sweep(subparsers)
     _add_examples(subparsers)
     _add_view(subparsers)
+    _add_serve(subparsers)
     _add_bench(subparsers)
     return parser
 
