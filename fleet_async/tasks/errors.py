@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from fleet_async.core.missions import MissionError, NoMissionRuntimeError
+from fleet_async.core.missions import ExternallyDrivenError, MissionError, NoMissionRuntimeError
 
 __all__ = [
     "ActionCancelledError",
     "ActionFailedError",
     "Cancelled",
+    "ExternallyDrivenError",
     "Interrupt",
     "MissionCancelledError",
     "MissionDeadlockError",

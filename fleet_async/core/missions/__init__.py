@@ -28,7 +28,11 @@ from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.missions.agent_missions import AgentMissionApi
-from fleet_async.core.missions.errors import MissionError, NoMissionRuntimeError
+from fleet_async.core.missions.errors import (
+    ExternallyDrivenError,
+    MissionError,
+    NoMissionRuntimeError,
+)
 from fleet_async.core.missions.hooks import mission_hook, register_mission_hook
 from fleet_async.core.missions.mission_api import MissionRuntime, SimEventBus, SimMissionApi
 
@@ -46,6 +50,7 @@ __all__ = [
     "ActionStatus",
     "AgentMissionApi",
     "DeviceEvents",
+    "ExternallyDrivenError",
     "MissionError",
     "MissionRuntime",
     "MoveAction",
