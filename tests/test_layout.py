@@ -36,6 +36,19 @@ def test_core_and_tasks_never_import_the_sweep_or_the_cli():
     assert imports_of("tasks", *above) == []
 
 
+def test_only_the_cli_and_examples_reach_the_fleet_interfaces():
+    # Fleet interfaces stand beside missions and trees, above the core: the core and the
+    # mission layer drive robots without knowing a master may.
+    for folder in ("core", "tasks", "behavior", "sweep", "viewer"):
+        assert imports_of(folder, "fleet_async.interfaces", "..interfaces") == [], folder
+
+
+def test_the_package_imports_no_vda5050_package():
+    # VDA 5050 is translated in fleet_async/interfaces/vda5050/ from the standard's schemas;
+    # third-party VDA 5050 packages (vda5050-sdk's `vda5050`) are for the tests only.
+    assert imports_of(".", "vda5050") == []
+
+
 def test_public_names_are_exported_and_resolve():
     for name in fleet_async.__all__:
         assert hasattr(fleet_async, name), name

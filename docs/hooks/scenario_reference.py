@@ -48,6 +48,9 @@ SECTION_TEXT = {
     "missions": "A list of async functions that run the fleet (below).",
     "trace": "`OUT.fatrace` or a mapping (below): record a trace of the run for "
     "`fleet-async view`, from the first frame (`sim.start_trace`).",
+    "serve": "What `fleet-async serve` serves to fleet software: `robots` (default all), "
+    "`broker` and the VDA 5050 settings (`version`, `manufacturer`, `serial_numbers`, ...; "
+    "[Fleet interfaces](fleet-interfaces.md)). Other commands ignore it.",
 }
 WORLD_TEXT = {
     "world_file": "A Gazebo `.world` file (its `model://` includes are resolved).",

@@ -85,8 +85,12 @@ class VehicleSnapshot:
         name: The vehicle (the robot's name).
         step: Step count when taken; ``sim_time`` is ``step * timestep``.
         sim_time: s.
-        x, y, theta: Pose in the world frame (m, m, rad).
-        vx, vy, omega: Velocity in the vehicle frame (m/s, m/s, rad/s).
+        x: Position in the world frame (m).
+        y: Position in the world frame (m).
+        theta: Heading in the world frame (rad).
+        vx: Velocity along the vehicle's heading (m/s).
+        vy: Velocity to the vehicle's left (m/s).
+        omega: Yaw rate (rad/s).
         driving: Whether it is moving.
         paused: Whether it was paused by its master.
         battery_charge: State of charge in percent (100 without a battery).
