@@ -14,20 +14,18 @@ opens in exactly 2.0 s of sim time, whatever the controllers do.
 
 from __future__ import annotations
 
-import math
 import weakref
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 from fleet_async.core.actions.action import Action, WaitHint
+from fleet_async.core.base.steps import steps_for
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["DeviceAction", "DeviceMotion", "MovingDevice"]
-
-_EPS = 1e-9
 
 
 class _Keyed(Protocol):
@@ -78,7 +76,7 @@ class DeviceMotion:
             True if there is nothing to do (no distance or no time): the device was put at
             ``s1`` at once and ``motion_finished`` was called.
         """
-        steps = max(0, math.ceil(duration / self.sim.params.timestep - _EPS))
+        steps = max(0, steps_for(duration, self.sim.params.timestep))
         self._moves.pop(device.object_id, None)
         if steps == 0 or s0 == s1:
             device.apply_motion(s1)

@@ -37,6 +37,7 @@ import numpy as np
 import pybullet as p
 
 from fleet_async.core.base.events import EventBus, SimEvents
+from fleet_async.core.base.steps import steps_for
 from fleet_async.core.sim.camera_config import CAMERA_MODES as CONFIG_CAMERA_MODES
 from fleet_async.core.view.camera import (
     DEFAULT_FOV_DEG,
@@ -362,7 +363,7 @@ class SimulationRecorder:
             timestep = self._sim.params.timestep
             due = math.floor(self._steps * self._fps * timestep + _EPS) + 1
             done = self._duration is not None and (
-                self._steps >= math.ceil(self._duration / timestep - _EPS)
+                self._steps >= steps_for(self._duration, timestep)
             )
         else:
             elapsed = self._clock() - self._wall0
