@@ -29,12 +29,12 @@ from fleet_async.cli.progress import ProgressBar
 from fleet_async.cli.summary import format_summary, summarize
 from fleet_async.cli.tables import format_table
 from fleet_async.core import CheckpointError, RobotKpis
+from fleet_async.core.base.camera_config import parse_camera_mode
 from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.steps import steps_for
 from fleet_async.core.scenario.build import SCENARIO_SECTIONS
-from fleet_async.core.sim.camera_config import parse_camera_mode
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view import gui, runner
 from fleet_async.scenario_runner import DEFAULT_MAX_DURATION, ScenarioOutcome, run_scenario

@@ -32,6 +32,7 @@ import numpy as np
 
 from fleet_async.core.agents.fleet import FleetMotion
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
@@ -39,7 +40,6 @@ from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
 from fleet_async.core.sim.idle import IdleApi, IdleSteps
 from fleet_async.core.sim.objects_api import ObjectsApi
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin, as_plugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
 from fleet_async.core.sim.pybullet_view import PyBulletViewApi
