@@ -99,7 +99,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         sim = cast("MultiRobotSimulationCore", self)
         self._world = World(sim, self._backend, self.events, self._params.physics)
         self._fleet = FleetMotion(sim)
-        self._collision = CollisionSystem(sim, self._push_dirty)
+        self._collision = CollisionSystem(self, self._push_dirty)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
