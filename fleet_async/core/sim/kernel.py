@@ -49,6 +49,7 @@ from fleet_async.core.world.state import KinematicState
 from fleet_async.core.world.world import World
 
 if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["MotionSystem", "SimulationKernel"]
@@ -161,7 +162,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         return self._fleet
 
     @property
-    def joint_motion(self) -> JointMotion:
+    def joint_motion(self) -> JointMotion[Agent]:
         """Moves URDF agents' joints towards their targets each step."""
         return self._joint_motion
 
