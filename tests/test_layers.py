@@ -62,11 +62,6 @@ FACADES = (
 TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset(
     {
         # Not yet narrowed to a protocol of the importing floor (issue 32, under way).
-        ("fleet_async.core.actions.action_queue", "fleet_async.core.agents.agent"),
-        ("fleet_async.core.actions.action_queue", "fleet_async.core.simulation"),
-        ("fleet_async.core.actions.action", "fleet_async.core.agents.agent"),
-        ("fleet_async.core.actions.arm_actions", "fleet_async.core.agents.agent"),
-        ("fleet_async.core.actions.pick_drop", "fleet_async.core.agents.agent"),
         ("fleet_async.core.agents.agent_joints", "fleet_async.core.simulation"),
         ("fleet_async.core.agents.agent_motion", "fleet_async.core.simulation"),
         ("fleet_async.core.agents.agent", "fleet_async.core.simulation"),
@@ -88,7 +83,7 @@ TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset(
         ("fleet_async.core.missions.agent_missions", "fleet_async.core.agents.agent"),
         ("fleet_async.core.missions", "fleet_async.core.devices"),
         ("fleet_async.core.missions", "fleet_async.core.simulation"),
-                ("fleet_async.core.scenario.build", "fleet_async.core.simulation"),
+        ("fleet_async.core.scenario.build", "fleet_async.core.simulation"),
         ("fleet_async.core.scenario.entities", "fleet_async.core.simulation"),
         ("fleet_async.core.scenario.world_loader", "fleet_async.core.simulation"),
         ("fleet_async.core.sim.kernel", "fleet_async.core.simulation"),

@@ -16,12 +16,13 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, cast
 
 from fleet_async.core.actions.action import Action, WaitHint
 from fleet_async.core.base.steps import steps_for
 
 if TYPE_CHECKING:
+    from fleet_async.core.actions.host import ActingAgent
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
@@ -125,12 +126,13 @@ class DeviceAction(Action):
 
     _started: bool = field(default=False, init=False, repr=False)
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def execute(self, agent: ActingAgent, dt: float) -> bool:
         """Start the device on the first call; complete when its motion has ended."""
+        device = cast("Agent", agent)  # a device runs its actions on itself, an Agent
         if not self._started:
             self._started = True
-            return self.begin(agent)
-        return not DeviceMotion.of(self._sim_of(agent)).is_moving(agent)
+            return self.begin(device)
+        return not DeviceMotion.of(self._sim_of(device)).is_moving(device)
 
     def begin(self, agent: Agent) -> bool:
         """Start the motion; return True if it is already over (subclasses)."""
@@ -143,11 +145,12 @@ class DeviceAction(Action):
         """Waits for the end of the device's motion."""
         return ("motion", None)
 
-    def on_cancel(self, agent: Agent) -> None:
+    def on_cancel(self, agent: ActingAgent) -> None:
         """Stop the device where it is."""
         if self._started:
-            DeviceMotion.of(self._sim_of(agent)).stop(agent)
-            self.halt(agent)
+            device = cast("Agent", agent)  # a device runs its actions on itself, an Agent
+            DeviceMotion.of(self._sim_of(device)).stop(device)
+            self.halt(device)
 
     def reset(self) -> None:
         """Forget progress."""

@@ -25,7 +25,7 @@ import pybullet as p
 if TYPE_CHECKING:
     from fleet_async.core.motion.host import Numbered
 
-__all__ = ["JointInfo", "JointMotion", "JointSet", "ToleranceSpec"]
+__all__ = ["JointInfo", "JointMotion", "JointSet", "JointTargets", "ToleranceSpec"]
 
 logger = logging.getLogger(__name__)
 
@@ -33,6 +33,8 @@ A = TypeVar("A", bound="Numbered")
 """The agents whose joints move (``Agent`` in a simulation)."""
 
 ToleranceSpec = float | Sequence[float] | Mapping[str, float] | None
+JointTargets = Sequence[float] | Mapping[str, float] | Mapping[int, float]
+"""Joint targets: a list, or a mapping keyed by joint name or index."""
 """A joint tolerance: one value for all joints, one per joint index, or {joint name: value}."""
 
 _MOVABLE = (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC)

@@ -162,6 +162,12 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         return self._fleet
 
     @property
+    def action_time(self) -> float:
+        """The action queues' clock (s): the sim time the actions being advanced run at, which
+        inside a step is that step's end for a timed action that ends with it."""
+        return self._fleet.actions.now
+
+    @property
     def joint_motion(self) -> JointMotion[Agent]:
         """Moves URDF agents' joints towards their targets each step."""
         return self._joint_motion
