@@ -34,9 +34,9 @@ import numpy as np
 
 from fleet_async.core.agents.agent import Agent
 from fleet_async.core.agents.agent_params import AgentSpawnParams
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.types import CollisionDetectionMethod
 from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.world.shapes import ShapeParams
 

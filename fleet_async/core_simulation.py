@@ -8,7 +8,7 @@ fleet_async imports this module.
 
 from __future__ import annotations
 
-from fleet_async.core.sim.params import SimulationParams
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["MultiRobotSimulationCore", "SimulationParams"]

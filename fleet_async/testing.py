@@ -26,7 +26,7 @@ from typing import Any
 
 import pytest
 
-from fleet_async.core.sim.params import SimulationParams
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.tasks.run import run
 

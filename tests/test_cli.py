@@ -22,7 +22,8 @@ from fleet_async import FleetKpis
 from fleet_async.cli import main
 from fleet_async.cli.errors import CliError
 from fleet_async.cli.progress import ProgressBar, format_progress
-from fleet_async.cli.run import RunSummary, format_summary, load_scenario, run_steps, steps_for
+from fleet_async.cli.run import load_scenario, run_steps, steps_for
+from fleet_async.cli.summary import RunSummary, format_summary
 from fleet_async.viewer import TraceReader
 
 REPO = Path(__file__).resolve().parent.parent

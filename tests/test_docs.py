@@ -128,8 +128,8 @@ def test_every_key_of_the_reference_has_a_description():
 
 def test_the_reference_covers_every_section_field_action_and_plugin():
     from fleet_async.core.agents.agent_plugins import AGENT_PLUGIN_REGISTRY
+    from fleet_async.core.base.params import SimulationParams
     from fleet_async.core.scenario import build, entities, missions, world_config
-    from fleet_async.core.sim.params import SimulationParams
 
     parts = {heading: {k.name for k in keys} for heading, _, keys in scenario_reference.sections()}
     assert parts["Top level"] == set(build.SCENARIO_SECTIONS)

@@ -1,7 +1,9 @@
 """The layer contract of ``fleet_async.core`` (docs/architecture.md, "Layers").
 
 Sub-packages of the core import only downward at run time: an import inside a function counts
-as much as one at the top of a module. Imports under ``if TYPE_CHECKING:`` may point anywhere.
+as much as one at the top of a module. Imports under ``if TYPE_CHECKING:`` point downward too,
+but for the pairs in ``TYPE_ONLY_UPWARD``: a lower floor annotates with a protocol of its own
+(``world/host.py``, ``collision/host.py``, ...) that the class above satisfies.
 Sub-packages on one floor (``metrics`` and ``checkpoint``; ``scenario`` and ``view``) do not
 import each other. Above the layers stand the public simulation class (``core/simulation.py``),
 then ``fleet_async.core`` itself; the seed-module facades (``fleet_async.agent``, ...) stand
@@ -56,6 +58,51 @@ FACADES = (
     "types",
 )
 """``fleet_async.<module>`` for each module of the reference API (seed-module facades)."""
+
+TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset(
+    {
+        # Not yet narrowed to a protocol of the importing floor (issue 32, under way).
+        ("fleet_async.core.agents.agent_joints", "fleet_async.core.simulation"),
+        ("fleet_async.core.agents.agent_motion", "fleet_async.core.simulation"),
+        ("fleet_async.core.agents.agent", "fleet_async.core.simulation"),
+        ("fleet_async.core.agents.fleet", "fleet_async.core.simulation"),
+        ("fleet_async.core.bodies.constructors", "fleet_async.core.simulation"),
+        ("fleet_async.core.bodies.object_callbacks", "fleet_async.core.simulation"),
+        ("fleet_async.core.bodies.sim_object", "fleet_async.core.simulation"),
+        ("fleet_async.core.bodies.spawning", "fleet_async.core.simulation"),
+        ("fleet_async.core.checkpoint.api", "fleet_async.core.simulation"),
+        ("fleet_async.core.checkpoint.format", "fleet_async.core.simulation"),
+        ("fleet_async.core.checkpoint.restoring", "fleet_async.core.simulation"),
+        ("fleet_async.core.checkpoint.saving", "fleet_async.core.simulation"),
+        ("fleet_async.core.devices.device", "fleet_async.core.simulation"),
+        ("fleet_async.core.devices.motion", "fleet_async.core.simulation"),
+        ("fleet_async.core.devices.workcell_plugin", "fleet_async.core.simulation"),
+        ("fleet_async.core.managers.agent_manager", "fleet_async.core.simulation"),
+        ("fleet_async.core.managers.sim_object_manager", "fleet_async.core.simulation"),
+        ("fleet_async.core.metrics.kpis", "fleet_async.core.simulation"),
+        ("fleet_async.core.missions.agent_missions", "fleet_async.core.agents.agent"),
+        ("fleet_async.core.missions", "fleet_async.core.devices"),
+        ("fleet_async.core.missions", "fleet_async.core.simulation"),
+        ("fleet_async.core.scenario.build", "fleet_async.core.simulation"),
+        ("fleet_async.core.scenario.entities", "fleet_async.core.simulation"),
+        ("fleet_async.core.scenario.world_loader", "fleet_async.core.simulation"),
+        ("fleet_async.core.sim.kernel", "fleet_async.core.simulation"),
+        ("fleet_async.core.sim.plugins", "fleet_async.core.simulation"),
+        ("fleet_async.core.view.gui", "fleet_async.core.simulation"),
+        ("fleet_async.core.view.runner", "fleet_async.core.simulation"),
+        ("fleet_async.core.view.trace.api", "fleet_async.core.simulation"),
+        ("fleet_async.core.view.trace.events", "fleet_async.core.simulation"),
+        ("fleet_async.core.view.trace.writer", "fleet_async.core.simulation"),
+        ("fleet_async.core.world.attachments", "fleet_async.core.bodies.sim_object"),
+        ("fleet_async.core.world.carrying", "fleet_async.core.bodies.sim_object"),
+        ("fleet_async.core.world.carrying", "fleet_async.core.simulation"),
+        ("fleet_async.core.world.pending", "fleet_async.core.bodies.sim_object"),
+        ("fleet_async.core.world.world", "fleet_async.core.bodies.sim_object"),
+        ("fleet_async.core.world.world", "fleet_async.core.bodies.standalone"),
+        ("fleet_async.core.world.world", "fleet_async.core.simulation"),
+    }
+)
+"""(module, imported module) pairs whose type-only import may point up a floor."""
 
 MISSION_SEAM = "fleet_async.core.missions"
 MAX_MODULES_PER_FOLDER = 15
@@ -145,19 +192,23 @@ def floor_of(module: str) -> tuple[int, str] | None:
     return _FLOOR[unit], unit
 
 
-def upward_imports(source: str, module: str, is_package: bool = False) -> list[str]:
-    """Run-time imports of core module ``module`` that break the layer contract."""
+def upward_imports(
+    source: str, module: str, is_package: bool = False, type_only_too: bool = False
+) -> list[str]:
+    """Imports of core module ``module`` that break the layer contract: run-time ones, and
+    with ``type_only_too`` the type-only ones as well (but the pairs in ``TYPE_ONLY_UPWARD``)."""
     here = floor_of(module)
     assert here is not None, module
     bad = []
     for target, line, type_only in imports(source, module, is_package):
-        if type_only:
+        if type_only and (not type_only_too or (module, target) in TYPE_ONLY_UPWARD):
             continue
         there = floor_of(target)
         if there is None:
             bad.append(f"{module}:{line} imports {target} (outside the core)")
         elif there[1] != here[1] and there[0] >= here[0]:
-            bad.append(f"{module}:{line} imports {target} (floor {there[0]} >= {here[0]})")
+            kind = " for annotations" if type_only else ""
+            bad.append(f"{module}:{line} imports {target}{kind} (floor {there[0]} >= {here[0]})")
     return bad
 
 
@@ -173,6 +224,22 @@ def test_core_imports_only_downward_at_run_time():
     assert bad == []
 
 
+def test_core_annotates_only_downward_but_for_the_justified_pairs():
+    bad = []
+    for path, module in package_modules(CORE):
+        bad += upward_imports(path.read_text(), module, path.name == "__init__.py", True)
+    assert bad == []
+
+
+def test_the_justified_pairs_still_exist():
+    found = set()
+    for path, module in package_modules(CORE):
+        for target, _, type_only in imports(path.read_text(), module, path.name == "__init__.py"):
+            if type_only:
+                found.add((module, target))
+    assert sorted(TYPE_ONLY_UPWARD - found) == []
+
+
 def test_every_core_module_stands_on_a_floor():
     for _path, module in package_modules(CORE):
         assert floor_of(module) is not None
@@ -185,13 +252,17 @@ def test_the_contract_sees_an_upward_import_inside_a_function():
     ]
 
 
-def test_the_contract_lets_type_only_imports_point_anywhere():
+def test_the_contract_sees_a_type_only_upward_import():
     source = (
         "from typing import TYPE_CHECKING\n"
         "if TYPE_CHECKING:\n"
         "    from fleet_async.core.simulation import MultiRobotSimulationCore\n"
     )
-    assert upward_imports(source, "fleet_async.core.world.world") == []
+    assert upward_imports(source, "fleet_async.core.geometry.pose") == []
+    assert upward_imports(source, "fleet_async.core.geometry.pose", type_only_too=True) == [
+        "fleet_async.core.geometry.pose:3 imports fleet_async.core.simulation for annotations"
+        " (floor 14 >= 1)"
+    ]
 
 
 def test_floor_mates_do_not_import_each_other():
@@ -230,11 +301,14 @@ def test_tasks_reach_the_core_only_through_the_mission_seam():
     assert bad == []
 
 
-def test_core_folders_and_modules_stay_small():
+def test_core_folders_stay_small():
     folders = [init.parent for init in CORE.rglob("__init__.py")]  # sub-packages' too
     for folder in folders:
         modules = [p for p in folder.glob("*.py") if p.name != "__init__.py"]
         assert len(modules) <= MAX_MODULES_PER_FOLDER, folder
-    for path in CORE.rglob("*.py"):
+
+
+def test_modules_of_the_whole_package_stay_small():
+    for path in PACKAGE.rglob("*.py"):
         lines = len(path.read_text().splitlines())
         assert lines <= MAX_LINES_PER_MODULE, f"{path.relative_to(PACKAGE)}: {lines} lines"

@@ -24,12 +24,12 @@ from typing import Any
 from fleet_async.core.actions.action import Action
 from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.agents.agent_plugins import AGENT_PLUGIN_REGISTRY
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.motion.controllers import CONTROLLER_REGISTRY, ControllerParams
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.scenario import build, entities, missions, world_config
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.world.shapes import ShapeParams
 
 MARKER = "<!-- scenario-reference -->"

@@ -40,6 +40,7 @@ from fleet_async.core.base.logging_utils import (
     get_named_lazy_logger,
     wrap_existing_logger,
 )
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.types import (
     ActionStatus,
     CollisionDetectionMethod,
@@ -100,7 +101,6 @@ from fleet_async.core.motion.controllers import (
 )
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.scenario.world_loader import WorldLoadError, WorldLoadFailure
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin
 from fleet_async.core.simulation import MultiRobotSimulationCore
 from fleet_async.core.view.monitor import DataMonitor

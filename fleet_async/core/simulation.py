@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.checkpoint.api import CheckpointApi
 from fleet_async.core.metrics.kpis import KpiApi
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.view.gui import GuiApi, handle_keyboard
 from fleet_async.core.view.monitor import MonitorApi
 from fleet_async.core.view.recording import RecordingApi

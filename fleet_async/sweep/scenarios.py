@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from fleet_async.core import MultiRobotSimulationCore, load_yaml_config
-from fleet_async.core.view.runner import steps_for
+from fleet_async.core.base.steps import steps_for
 from fleet_async.scenario_runner import DEFAULT_MAX_DURATION, run_scenario
 from fleet_async.sweep.overrides import (
     SweepKeyError,

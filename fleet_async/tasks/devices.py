@@ -15,7 +15,10 @@ layer's primitives lives here:
   door, drive through, and close it behind when nobody waits for the doorway.
 
 Importing this module registers ``ride`` and ``pass_through`` as the missions behind the
-devices' methods of those names (``import fleet_async`` imports it).
+devices' methods of those names. ``fleet_async.tasks`` imports it, so they are registered once
+the mission layer is loaded (``fleet_async.run``, ``import fleet_async.tasks``, or the first
+public name taken from ``fleet_async``; a bare ``import fleet_async`` binds its names lazily
+and loads nothing).
 """
 
 from __future__ import annotations

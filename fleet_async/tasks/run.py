@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import anyio
 import anyio.lowlevel
 
+from fleet_async.core.missions import steps_for
 from fleet_async.tasks.errors import MissionDeadlockError, MissionStalledError
 from fleet_async.tasks.groups import lone_error
 from fleet_async.tasks.missions import dispatch
@@ -136,7 +137,7 @@ async def run_async(
         raise ValueError(f"until must be a finite sim time, got {until!r}")
     runtime = Runtime(sim)
     sim.set_mission_runtime(runtime)
-    until_step = None if until is None else math.ceil(until / sim.params.timestep - 1e-9)
+    until_step = None if until is None else steps_for(until, sim.params.timestep)
     driver = _Driver(runtime, until_step, watchdog)
     runtime.kernel.is_host_cancel = driver.is_host_cancel
     try:

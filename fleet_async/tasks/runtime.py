@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fleet_async.core.missions import SimEvents
+from fleet_async.core.missions import SimEvents, steps_for
 from fleet_async.tasks.conditions import AllOf, AnyOf
 from fleet_async.tasks.groups import Nursery, TaskGroup, gather, race
 from fleet_async.tasks.kernel import STEP, Kernel, SimEvent, Timeout
@@ -27,8 +27,6 @@ if TYPE_CHECKING:
     from fleet_async.core.missions import MultiRobotSimulationCore
 
 __all__ = ["Runtime"]
-
-_EPS = 1e-9
 
 
 class Runtime:
@@ -143,7 +141,7 @@ class Runtime:
         """
         if not math.isfinite(seconds) or seconds < 0:
             raise ValueError(f"{what}: expected a finite number of seconds >= 0, got {seconds!r}")
-        return max(0, math.ceil(seconds / self.kernel.timestep - _EPS))
+        return max(0, steps_for(seconds, self.kernel.timestep))
 
     def timeout(self, seconds: float, value: Any = None, what: str = "sim.timeout") -> Timeout:
         """An event that succeeds with ``value`` after ``seconds`` of sim time."""
@@ -153,7 +151,7 @@ class Runtime:
         """An event that succeeds at sim time ``t`` (at once if it has passed)."""
         if not math.isfinite(t):
             raise ValueError(f"sim.sleep_until: expected a finite sim time, got {t!r}")
-        step = math.ceil(t / self.kernel.timestep - _EPS)
+        step = steps_for(t, self.kernel.timestep)
         return Timeout(self.kernel, max(0, step - self.kernel.now))
 
     def scope(
@@ -166,7 +164,7 @@ class Runtime:
         if absolute:
             if not math.isfinite(seconds):
                 raise ValueError(f"deadline: expected a finite sim time, got {seconds!r}")
-            step = max(0, math.ceil(seconds / self.kernel.timestep - _EPS))
+            step = max(0, steps_for(seconds, self.kernel.timestep))
         else:
             step = self.kernel.now + self.steps_for(seconds, "sim.move_on_after")
         return CancelScope(self.kernel, step, shield, fail)

@@ -19,6 +19,7 @@ import math
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
 
+from fleet_async.core.missions import steps_for
 from fleet_async.tasks.errors import Cancelled, Interrupt
 from fleet_async.tasks.kernel import PENDING, URGENT, Kernel, SimEvent, Timeout
 
@@ -98,7 +99,7 @@ class CancelScope:
         if math.isinf(t) and t > 0:
             self._deadline_step = None
         else:
-            self._deadline_step = max(0, math.ceil(t / self.kernel.timestep - 1e-9))
+            self._deadline_step = max(0, steps_for(t, self.kernel.timestep))
         if self._active:
             self._arm()
 

@@ -17,7 +17,7 @@ from fleet_async import (
     SimulationParams,
 )
 from fleet_async.cli.run import load_scenario
-from fleet_async.core.sim.camera_config import parse_camera_config, parse_camera_mode
+from fleet_async.core.base.camera_config import parse_camera_config, parse_camera_mode
 from fleet_async.core.view import gui
 from fleet_async.core.view.camera import SceneCamera, fit_distance
 from tests.conftest import headless_params

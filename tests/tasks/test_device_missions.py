@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import logging
 import math
+import subprocess
+import sys
 
 import pytest
 
@@ -201,3 +203,23 @@ async def test_robots_queue_at_a_dispenser_and_hand_items_to_an_ingestor(fleet_s
     assert taken.item.sim_core is None and plugin["ing"].ingested == [taken.item]
     with pytest.raises(fa.ActionFailedError, match=r"b is 2.02 m from ing \(reach 1 m\)"):
         await plugin["ing"].ingest(b)
+
+
+def test_the_mission_layer_registers_the_device_missions_when_it_is_loaded():
+    # A fresh interpreter: this one has loaded the mission layer long ago.
+    code = (
+        "import fleet_async\n"
+        "from fleet_async.core.missions import hooks\n"
+        "try:\n"
+        "    hooks.mission_hook('elevator.ride')\n"
+        "except RuntimeError as e:\n"
+        "    print('before:', e)\n"
+        "import fleet_async.tasks\n"
+        "print('after:', hooks.mission_hook('elevator.ride').__name__)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert "before: elevator.ride is a mission of the mission layer" in out
+    assert "import fleet_async.tasks first" in out
+    assert "after: ride" in out

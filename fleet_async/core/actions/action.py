@@ -27,7 +27,7 @@ from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.actions.host import ActingAgent
 
 __all__ = [
     "DEFAULT_EE_TOLERANCE",
@@ -84,7 +84,7 @@ class Action(ABC):
     _cancel_hook: Callable[[Action], None] | None = field(default=None, init=False, repr=False)
 
     @abstractmethod
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def execute(self, agent: ActingAgent, dt: float) -> bool:
         """Advance the action; return True once it is complete (successfully or not)."""
 
     @abstractmethod
@@ -112,7 +112,7 @@ class Action(ABC):
         if hook is not None:
             hook(self)
 
-    def on_cancel(self, agent: Agent) -> None:  # noqa: B027  # optional hook, empty by default
+    def on_cancel(self, agent: ActingAgent) -> None:  # noqa: B027  # optional hook, empty by default
         """Clean up after being cancelled while running (the queue has already stopped motion)."""
 
     @property
@@ -147,7 +147,7 @@ class Action(ABC):
         self.error_message = None
 
 
-def _clock(agent: Agent) -> float:
+def _clock(agent: ActingAgent) -> float:
     """The sim time an action run directly reads (0.0 for an agent outside a simulation)."""
     sim = agent.sim_core
     return 0.0 if sim is None else sim.sim_time
@@ -162,7 +162,7 @@ class TrackedAction(Action):
     stamps the exact end time afterwards.
     """
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def execute(self, agent: ActingAgent, dt: float) -> bool:
         """Run one timestep of ``dt`` seconds; True once the action is complete."""
         if self.status is ActionStatus.NOT_STARTED:
             self.status = ActionStatus.IN_PROGRESS
@@ -176,7 +176,7 @@ class TrackedAction(Action):
         return True
 
     @abstractmethod
-    def step(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: ActingAgent, dt: float) -> bool:
         """The action's own work for one timestep; True once it is done (or :meth:`fail`)."""
 
 
@@ -214,7 +214,7 @@ class MoveAction(TrackedAction):
             raise ValueError("MoveAction.path: expected at least one waypoint, got an empty path")
         self.direction = coerce_enum(MovementDirection, self.direction, "MoveAction.direction")
 
-    def step(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: ActingAgent, dt: float) -> bool:
         """Send the path on the first call; complete when motion ends at the goal.
 
         On a fixed-base agent the move is skipped with a warning (it completes at once), unless
@@ -239,7 +239,7 @@ class MoveAction(TrackedAction):
             return False
         return self._finish(agent)
 
-    def _finish(self, agent: Agent) -> bool:
+    def _finish(self, agent: ActingAgent) -> bool:
         if agent.motion_result is False:
             return self.fail("motion stopped before reaching the goal")
         return True
@@ -283,11 +283,11 @@ class WaitAction(TrackedAction):
             raise ValueError(f"WaitAction.duration: expected a finite number >= 0 (s), got {d!r}")
         self.duration = float(d)
 
-    def step(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: ActingAgent, dt: float) -> bool:
         """Start the timer on the first call; complete once it has run out."""
         sim = agent.sim_core
         if self.in_queue and sim is not None:  # the queue's clock: exact sim times
-            now = sim.fleet.actions.now
+            now = sim.action_time
         else:  # run directly: the caller's dt is the time that passes per call
             self._elapsed += dt
             now = self._elapsed
@@ -305,7 +305,7 @@ class WaitAction(TrackedAction):
         """Waits until the end time."""
         return ("time", self._until)
 
-    def on_cancel(self, agent: Agent) -> None:
+    def on_cancel(self, agent: ActingAgent) -> None:
         """Stop charging if this wait was charging."""
         if self._until is not None and self.action_type == "charge":
             agent.set_charging(False)

@@ -21,8 +21,7 @@ from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import ActionStatus
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.actions.host import ActingAgent, QueueHost
 
 __all__ = ["ActionQueue"]
 
@@ -32,11 +31,11 @@ _EPS = 1e-9
 class ActionQueue:
     """Every agent's action queue in one simulation."""
 
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, sim: QueueHost) -> None:
         self._sim = sim
         self._queued: dict[int, deque[Action]] = {}
         self._current: dict[int, Action] = {}
-        self._agents: dict[int, Agent] = {}
+        self._agents: dict[int, ActingAgent] = {}
         self._due: set[int] = set()  # agents to advance at the next tick
         self._on_motion: set[int] = set()  # agents whose action waits for motion to end
         self._timers: list[tuple[float, int, int, Action]] = []
@@ -46,15 +45,15 @@ class ActionQueue:
 
     # ----- queries ------------------------------------------------------------------------
 
-    def current(self, agent: Agent) -> Action | None:
+    def current(self, agent: ActingAgent) -> Action | None:
         """The action ``agent`` is executing, or None."""
         return self._current.get(agent.object_id)
 
-    def queued(self, agent: Agent) -> int:
+    def queued(self, agent: ActingAgent) -> int:
         """Number of actions waiting behind the current one."""
         return len(self._queued.get(agent.object_id, ()))
 
-    def is_idle(self, agent: Agent) -> bool:
+    def is_idle(self, agent: ActingAgent) -> bool:
         """No current action and nothing queued."""
         return agent.object_id not in self._current and not self._queued.get(agent.object_id)
 
@@ -77,7 +76,7 @@ class ActionQueue:
 
     # ----- commands -----------------------------------------------------------------------
 
-    def submit(self, agent: Agent, action: Action) -> None:
+    def submit(self, agent: ActingAgent, action: Action) -> None:
         """Queue ``action`` for ``agent``; it starts at the next action tick.
 
         Raises:
@@ -99,7 +98,7 @@ class ActionQueue:
         action.bind_cancel_hook(functools.partial(self._cancelled, agent))
         self._due.add(key)
 
-    def clear(self, agent: Agent) -> None:
+    def clear(self, agent: ActingAgent) -> None:
         """Cancel the current action and drop every queued one (each marked CANCELLED)."""
         for action in list(self._queued.get(agent.object_id, ())):
             action.cancel()
@@ -107,7 +106,7 @@ class ActionQueue:
         if current is not None:
             current.cancel()
 
-    def forget(self, agent: Agent, reason: str = "its agent left the simulation") -> None:
+    def forget(self, agent: ActingAgent, reason: str = "its agent left the simulation") -> None:
         """Drop the agent's actions: each ends CANCELLED with ``reason`` (ACTION_FAILED is
         emitted), so nobody waiting on one waits forever."""
         key = agent.object_id
@@ -153,7 +152,7 @@ class ActionQueue:
             "now": self.now,
         }
 
-    def set_state(self, state: dict[str, Any], agent_of: Callable[[int], Agent]) -> None:
+    def set_state(self, state: dict[str, Any], agent_of: Callable[[int], ActingAgent]) -> None:
         """Replace every queue with ``state`` (from :meth:`get_state`); ``agent_of`` maps an
         object id to its agent. Queued and running actions get their cancel hooks again."""
         self._queued = {key: deque(actions) for key, actions in state["queued"].items()}
@@ -215,7 +214,7 @@ class ActionQueue:
                 expired.add(key)
         return expired
 
-    def on_motion_end(self, agent: Agent, now: float, dt: float) -> None:
+    def on_motion_end(self, agent: ActingAgent, now: float, dt: float) -> None:
         """The engine stopped ``agent`` (during motion; ``now`` is the end of the step)."""
         key = agent.object_id
         if key not in self._on_motion:
@@ -230,7 +229,7 @@ class ActionQueue:
         else:
             self._park(agent, action)
 
-    def _advance(self, agent: Agent, now: float, dt: float) -> None:
+    def _advance(self, agent: ActingAgent, now: float, dt: float) -> None:
         key = agent.object_id
         while True:
             action = self._current.get(key)
@@ -248,7 +247,7 @@ class ActionQueue:
                 return
             self._complete(agent, action, now)
 
-    def _execute(self, agent: Agent, action: Action, dt: float) -> bool:
+    def _execute(self, agent: ActingAgent, action: Action, dt: float) -> bool:
         try:
             return bool(action.execute(agent, dt))
         except Exception as exc:
@@ -256,7 +255,7 @@ class ActionQueue:
             self._complete(agent, action, self._sim.sim_time)
             raise
 
-    def _park(self, agent: Agent, action: Action) -> None:
+    def _park(self, agent: ActingAgent, action: Action) -> None:
         kind, when = action.wait_hint()
         key = agent.object_id
         if kind == "motion":
@@ -267,7 +266,7 @@ class ActionQueue:
         else:
             self._due.add(key)
 
-    def _complete(self, agent: Agent, action: Action, now: float) -> None:
+    def _complete(self, agent: ActingAgent, action: Action, now: float) -> None:
         if action.status is ActionStatus.IN_PROGRESS:
             action.status = ActionStatus.COMPLETED
         action.end_time = now
@@ -281,7 +280,7 @@ class ActionQueue:
         )
         self._emit(event, agent, action)
 
-    def _cancelled(self, agent: Agent, action: Action) -> None:
+    def _cancelled(self, agent: ActingAgent, action: Action) -> None:
         key = agent.object_id
         queue = self._queued.get(key)
         if queue is not None and any(a is action for a in queue):
@@ -299,7 +298,7 @@ class ActionQueue:
         self._due.add(key)
         self._emit(SimEvents.ACTION_FAILED, agent, action)
 
-    def _emit(self, event: str, agent: Agent, action: Action) -> None:
+    def _emit(self, event: str, agent: ActingAgent, action: Action) -> None:
         if event == SimEvents.ACTION_STARTED:
             self._sim.events.emit(event, agent=agent, action=action)
             if agent.has_event_bus():

@@ -22,7 +22,7 @@ from fleet_async.core.actions.action import (
 )
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.actions.host import ActingAgent
 
 __all__ = ["JointAction", "PoseAction"]
 
@@ -41,7 +41,7 @@ class _ArmAction(TrackedAction):
         """Woken when kinematic joints move; polled each step for physics joints."""
         return ("poll", None) if self._polled else ("motion", None)
 
-    def on_cancel(self, agent: Agent) -> None:
+    def on_cancel(self, agent: ActingAgent) -> None:
         """Cancelled while running: the joints stop where they are."""
         agent.stop_joints()
 
@@ -73,7 +73,7 @@ class JointAction(_ArmAction):
             raise ValueError("JointAction.target_joint_positions: expected at least one target")
         _check_force("JointAction", self.max_force)
 
-    def step(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: ActingAgent, dt: float) -> bool:
         """Command the targets on the first call; complete once the joints are within tolerance."""
         if self._targets is None:
             if agent.get_num_joints() == 0:
@@ -139,7 +139,7 @@ class PoseAction(_ArmAction):
             raise ValueError(f"PoseAction.tolerance: expected a number > 0 (m), got {tol!r}")
         _check_force("PoseAction", self.max_force)
 
-    def step(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: ActingAgent, dt: float) -> bool:
         """Solve and command on the first call; judge the pose once the joints settle."""
         if not self._started:
             self._started = True

@@ -35,7 +35,7 @@ from fleet_async.core.geometry.approach import calculate_offset_pose, find_neare
 from fleet_async.core.geometry.pose import Pose
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.actions.host import ActingAgent
     from fleet_async.core.bodies.sim_object import SimObject
 
 __all__ = ["DropAction", "PickAction"]
@@ -101,14 +101,14 @@ class _ApproachAction(TrackedAction):
             )
 
     # subclass hooks ------------------------------------------------------------------------
-    def _target_position(self, agent: Agent) -> np.ndarray | str:
+    def _target_position(self, agent: ActingAgent) -> np.ndarray | str:
         raise NotImplementedError
 
-    def _act(self, agent: Agent) -> str | None:
+    def _act(self, agent: ActingAgent) -> str | None:
         raise NotImplementedError
 
     # shared sequence -----------------------------------------------------------------------
-    def _plan(self, agent: Agent) -> deque[_Stage] | str:
+    def _plan(self, agent: ActingAgent) -> deque[_Stage] | str:
         uses_arm = self.joint_targets is not None or self.ee_target_position is not None
         if uses_arm and agent.get_num_joints() == 0:
             return f"joint_targets / ee_target_* need an agent with joints; {agent!r} has none"
@@ -144,7 +144,7 @@ class _ApproachAction(TrackedAction):
             stages.append(("move", approach, phases["RETREATING"], MovementDirection.BACKWARD))
         return stages
 
-    def _reach_targets(self, agent: Agent) -> dict[int, float] | str:
+    def _reach_targets(self, agent: ActingAgent) -> dict[int, float] | str:
         """Joint targets for the reach: the given ones, or an IK solution for the EE target."""
         self._arm_home = {j: float(agent.joints.positions[j]) for j in agent.joints.movable_indices}
         if self.joint_targets is not None:
@@ -168,11 +168,11 @@ class _ApproachAction(TrackedAction):
             )
         return dict(solution.targets)
 
-    def _home_targets(self, agent: Agent) -> dict[int, float] | str:
+    def _home_targets(self, agent: ActingAgent) -> dict[int, float] | str:
         """Lift: the joints go back to where they were before the reach."""
         return dict(self._arm_home)
 
-    def _run_joint_stage(self, agent: Agent, stage: _Stage) -> bool | str:
+    def _run_joint_stage(self, agent: ActingAgent, stage: _Stage) -> bool | str:
         """Command (first call) and wait for one joint stage; True once the joints arrived."""
         if self._arm_targets is None:
             targets = stage[1](agent)
@@ -188,7 +188,7 @@ class _ApproachAction(TrackedAction):
         self._arm_targets = None
         return True
 
-    def step(self, agent: Agent, dt: float) -> bool:
+    def step(self, agent: ActingAgent, dt: float) -> bool:
         """Run stages until one has to wait for motion, or all are done."""
         if self._stages is None:
             planned = self._plan(agent)
@@ -239,7 +239,7 @@ class _ApproachAction(TrackedAction):
         """Waits for motion while a sub-move or the arm runs, else polls."""
         return ("motion", None) if self._moving or self._arm_targets is not None else ("poll", None)
 
-    def on_cancel(self, agent: Agent) -> None:
+    def on_cancel(self, agent: ActingAgent) -> None:
         """Cancelled while the arm was moving: the joints stop where they are."""
         if self._arm_targets is not None:
             agent.stop_joints()
@@ -254,7 +254,7 @@ class _ApproachAction(TrackedAction):
         self._arm_home = {}
 
 
-def _resolve_body(agent: Agent, body_id: Any) -> SimObject | None:
+def _resolve_body(agent: ActingAgent, body_id: Any) -> SimObject | None:
     sim = agent.sim_core
     if sim is None:
         return None
@@ -319,14 +319,14 @@ class PickAction(_ApproachAction):
                 f"got {self.attach_relative_pose!r}"
             )
 
-    def _target_position(self, agent: Agent) -> np.ndarray | str:
+    def _target_position(self, agent: ActingAgent) -> np.ndarray | str:
         obj = self._find(agent)
         if isinstance(obj, str):
             return obj
         self.picked_object = obj
         return obj.get_pose().position
 
-    def _find(self, agent: Agent) -> SimObject | str:
+    def _find(self, agent: ActingAgent) -> SimObject | str:
         if self.target_object_id is not None:
             obj = _resolve_body(agent, self.target_object_id)
             if obj is None:
@@ -353,7 +353,7 @@ class PickAction(_ApproachAction):
             )
         return found
 
-    def _act(self, agent: Agent) -> str | None:
+    def _act(self, agent: ActingAgent) -> str | None:
         obj = self.picked_object
         assert obj is not None
         if obj.is_attached():  # someone else took it while we were driving
@@ -426,7 +426,7 @@ class DropAction(_ApproachAction):
                 f"DropAction.drop_relative_pose: expected a Pose, got {self.drop_relative_pose!r}"
             )
 
-    def _target_position(self, agent: Agent) -> np.ndarray | str:
+    def _target_position(self, agent: ActingAgent) -> np.ndarray | str:
         carried = agent.get_attached_objects()
         if not carried:
             return "nothing is attached to drop"
@@ -440,7 +440,7 @@ class DropAction(_ApproachAction):
         assert self.drop_pose is not None
         return self.drop_pose.position
 
-    def _act(self, agent: Agent) -> str | None:
+    def _act(self, agent: ActingAgent) -> str | None:
         obj = self.dropped_object
         assert obj is not None
         assert self.drop_pose is not None

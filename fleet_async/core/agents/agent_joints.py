@@ -20,7 +20,7 @@ import numpy as np
 
 from fleet_async.core.actions.action import DEFAULT_EE_TOLERANCE, DEFAULT_MAX_FORCE
 from fleet_async.core.motion.ik import IKParams, detect_end_effector, orientation_error, solve_ik
-from fleet_async.core.motion.joints import JointSet, ToleranceSpec, read_joint_infos
+from fleet_async.core.motion.joints import JointSet, JointTargets, ToleranceSpec, read_joint_infos
 from fleet_async.core.world.links import link_index
 
 if TYPE_CHECKING:
@@ -28,9 +28,6 @@ if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["AgentJointsApi"]
-
-JointTargets = Sequence[float] | Mapping[str, float] | Mapping[int, float]
-"""Joint targets: a list, or a mapping keyed by joint name or index."""
 
 
 class AgentJointsApi:

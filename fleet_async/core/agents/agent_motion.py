@@ -31,6 +31,7 @@ from fleet_async.core.motion.controllers import (
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.motion.joints import JointSet
+    from fleet_async.core.motion.kinematics import KinematicEngine
     from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.core.world.state import KinematicState
 
@@ -113,6 +114,12 @@ class AgentMotionApi:
         """The base controller's params (defaults when there is none)."""
         base = self.controller
         return base.params if base is not None else ControllerParams()
+
+    @property
+    def motion_engine(self) -> KinematicEngine | None:
+        """The kinematic engine that holds this agent's slot (None outside a simulation)."""
+        sim = self.sim_core
+        return None if sim is None else sim.fleet.engine
 
     @property
     def motion_slot(self) -> int:

@@ -30,7 +30,7 @@ from fleet_async.core.collision.pairs import ActivePairs, decode, id_pairs, pair
 from fleet_async.core.world.state import COLLISION_CODES
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.collision.host import CollisionHost
 
 __all__ = ["CollisionListener", "CollisionSystem"]
 
@@ -55,9 +55,7 @@ class CollisionSystem:
         on_sync: Pushes the given rows' poses to PyBullet.
     """
 
-    def __init__(
-        self, sim: MultiRobotSimulationCore, on_sync: Callable[[np.ndarray], None]
-    ) -> None:
+    def __init__(self, sim: CollisionHost, on_sync: Callable[[np.ndarray], None]) -> None:
         self._sim = sim
         prm = sim.params
         self.frequency = prm.collision_check_frequency

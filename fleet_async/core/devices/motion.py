@@ -14,20 +14,19 @@ opens in exactly 2.0 s of sim time, whatever the controllers do.
 
 from __future__ import annotations
 
-import math
 import weakref
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, cast
 
 from fleet_async.core.actions.action import Action, WaitHint
+from fleet_async.core.base.steps import steps_for
 
 if TYPE_CHECKING:
+    from fleet_async.core.actions.host import ActingAgent
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["DeviceAction", "DeviceMotion", "MovingDevice"]
-
-_EPS = 1e-9
 
 
 class _Keyed(Protocol):
@@ -78,7 +77,7 @@ class DeviceMotion:
             True if there is nothing to do (no distance or no time): the device was put at
             ``s1`` at once and ``motion_finished`` was called.
         """
-        steps = max(0, math.ceil(duration / self.sim.params.timestep - _EPS))
+        steps = max(0, steps_for(duration, self.sim.params.timestep))
         self._moves.pop(device.object_id, None)
         if steps == 0 or s0 == s1:
             device.apply_motion(s1)
@@ -127,12 +126,13 @@ class DeviceAction(Action):
 
     _started: bool = field(default=False, init=False, repr=False)
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def execute(self, agent: ActingAgent, dt: float) -> bool:
         """Start the device on the first call; complete when its motion has ended."""
+        device = cast("Agent", agent)  # a device runs its actions on itself, an Agent
         if not self._started:
             self._started = True
-            return self.begin(agent)
-        return not DeviceMotion.of(self._sim_of(agent)).is_moving(agent)
+            return self.begin(device)
+        return not DeviceMotion.of(self._sim_of(device)).is_moving(device)
 
     def begin(self, agent: Agent) -> bool:
         """Start the motion; return True if it is already over (subclasses)."""
@@ -145,11 +145,12 @@ class DeviceAction(Action):
         """Waits for the end of the device's motion."""
         return ("motion", None)
 
-    def on_cancel(self, agent: Agent) -> None:
+    def on_cancel(self, agent: ActingAgent) -> None:
         """Stop the device where it is."""
         if self._started:
-            DeviceMotion.of(self._sim_of(agent)).stop(agent)
-            self.halt(agent)
+            device = cast("Agent", agent)  # a device runs its actions on itself, an Agent
+            DeviceMotion.of(self._sim_of(device)).stop(device)
+            self.halt(device)
 
     def reset(self) -> None:
         """Forget progress."""

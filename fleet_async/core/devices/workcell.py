@@ -36,6 +36,7 @@ from fleet_async.core.geometry.pose_config import pose_from_config
 from fleet_async.core.world.shapes import ShapeParams
 
 if TYPE_CHECKING:
+    from fleet_async.core.actions.host import ActingAgent
     from fleet_async.core.agents.agent import Agent
 
 __all__ = ["DispenseAction", "IngestAction", "Workcell", "WorkcellKind", "WorkcellParams"]
@@ -137,12 +138,12 @@ class _StationAction(Action):
     item: SimObject | None = None
     _until: float | None = field(default=None, init=False, repr=False)
 
-    def execute(self, agent: Agent, dt: float) -> bool:
+    def execute(self, agent: ActingAgent, dt: float) -> bool:
         """Start (checks, hand-over) on the first call; finish when the timer runs out."""
         if not isinstance(agent, Workcell):
             return self.fail(f"{type(self).__name__} runs on a Workcell, not {agent!r}")
         sim = agent.sim_core
-        now = 0.0 if sim is None else sim.fleet.actions.now
+        now = 0.0 if sim is None else sim.action_time
         if self._until is None:
             problem = agent.reach_problem(self.robot) or self.start(agent)
             if problem:

@@ -14,7 +14,8 @@
 - device composites (``hooks.py``): ``register_mission_hook`` lets ``fleet_async.tasks.devices``
   implement ``elevator.ride`` and ``door.pass_through``, which need the mission layer's own
   primitives; ``DeviceEvents`` names what devices emit, and ``Door``, ``Elevator``,
-  ``Workcell`` are named for annotations only.
+  ``Workcell`` are named for annotations only;
+- ``steps_for``: the package's one rule for sim seconds to whole steps (``core/base/steps.py``).
 
 May import ``actions`` and below at run time.
 """
@@ -26,6 +27,7 @@ from typing import TYPE_CHECKING
 from fleet_async.core.actions.action import Action, MoveAction, WaitAction
 from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.steps import steps_for
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.missions.agent_missions import AgentMissionApi
 from fleet_async.core.missions.errors import (
@@ -61,4 +63,5 @@ __all__ = [
     "WaitAction",
     "mission_hook",
     "register_mission_hook",
+    "steps_for",
 ]

@@ -4,7 +4,10 @@ Some device commands are whole missions built from the mission layer's own primi
 ``await elevator.ride(robot, "L2")`` holds the lift as a sim-aware Resource, calls it, boards,
 travels and alights. The core cannot import ``fleet_async.tasks``, so the device method looks
 its implementation up here by name, and ``fleet_async.tasks.devices`` registers it when it is
-imported (``import fleet_async`` does that).
+imported: ``fleet_async.tasks`` imports it, so the hooks are there once the mission layer is
+loaded (``fleet_async.run``, ``import fleet_async.tasks``, or the first public name taken from
+``fleet_async``). A bare ``import fleet_async`` does not load it: the package binds its public
+names lazily, so that the command line starts without PyBullet.
 """
 
 from __future__ import annotations
@@ -43,5 +46,5 @@ def mission_hook(name: str) -> Callable[..., Any]:
     except KeyError:
         raise RuntimeError(
             f"{name} is a mission of the mission layer, which is not loaded: "
-            "import fleet_async (or fleet_async.tasks.devices) first"
+            "import fleet_async.tasks first (fleet_async.run does)"
         ) from None

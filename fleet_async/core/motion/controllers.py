@@ -31,7 +31,7 @@ from fleet_async.core.motion.kinematics import KIND_DIFFERENTIAL, KIND_OMNI, Kin
 from fleet_async.core.motion.segments import MotionLimits, checked_limit
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.motion.host import ControlledAgent
 
 __all__ = [
     "CONTROLLER_REGISTRY",
@@ -101,13 +101,13 @@ class Controller(AttributeState):
     def __init__(self, params: ControllerParams | None = None) -> None:
         self.params = params if params is not None else ControllerParams()
 
-    def on_install(self, agent: Agent) -> None:
+    def on_install(self, agent: ControlledAgent) -> None:
         """Called when the controller joins ``agent``'s chain."""
 
-    def on_remove(self, agent: Agent) -> None:
+    def on_remove(self, agent: ControlledAgent) -> None:
         """Called when the controller leaves ``agent``'s chain."""
 
-    def compute(self, agent: Agent, dt: float) -> None:
+    def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Advance this controller for one step of ``dt`` seconds."""
 
     @property
@@ -149,7 +149,7 @@ class KinematicController(Controller):
 
     def set_path(
         self,
-        agent: Agent,
+        agent: ControlledAgent,
         waypoints: list[Pose],
         direction: MovementDirection,
         final_orientation_align: bool,
@@ -157,35 +157,38 @@ class KinematicController(Controller):
         """Start following ``waypoints``."""
         _engine(agent).set_path(agent.motion_slot, waypoints, direction, final_orientation_align)
 
-    def set_velocity(self, agent: Agent, command: tuple[float, float, float, float]) -> None:
+    def set_velocity(
+        self, agent: ControlledAgent, command: tuple[float, float, float, float]
+    ) -> None:
         """Follow a body-frame (vx, vy, vz, wz) command."""
         _engine(agent).set_velocity(agent.motion_slot, command)
 
-    def stop(self, agent: Agent) -> None:
+    def stop(self, agent: ControlledAgent) -> None:
         """Stop at once."""
         _engine(agent).stop(agent.motion_slot)
 
-    def is_moving(self, agent: Agent) -> bool:
+    def is_moving(self, agent: ControlledAgent) -> bool:
         """Whether the agent is moving under this controller."""
         return _engine(agent).is_moving(agent.motion_slot)
 
-    def goal_pose(self, agent: Agent) -> Pose | None:
+    def goal_pose(self, agent: ControlledAgent) -> Pose | None:
         """Final pose of the current path, or None."""
         return _engine(agent).goal(agent.motion_slot)
 
-    def remaining_path(self, agent: Agent) -> list[Pose]:
+    def remaining_path(self, agent: ControlledAgent) -> list[Pose]:
         """Waypoints not reached yet."""
         return _engine(agent).remaining_waypoints(agent.motion_slot)
 
-    def waypoint_index(self, agent: Agent) -> int:
+    def waypoint_index(self, agent: ControlledAgent) -> int:
         """Index of the waypoint being approached."""
         return _engine(agent).waypoint_index(agent.motion_slot)
 
 
-def _engine(agent: Agent) -> KinematicEngine:
-    assert agent.sim_core is not None
+def _engine(agent: ControlledAgent) -> KinematicEngine:
+    engine = agent.motion_engine
+    assert engine is not None
     assert agent.motion_slot >= 0
-    return agent.sim_core.fleet.engine
+    return engine
 
 
 class OmniController(KinematicController):
@@ -268,7 +271,7 @@ class PatrolController(Controller):
         self._waiting_until: float | None = None
         self._sent = False
 
-    def compute(self, agent: Agent, dt: float) -> None:
+    def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Send the next waypoint once the agent has arrived and waited."""
         if self.finished or agent.is_moving or agent.get_current_action() is not None:
             return
@@ -325,14 +328,14 @@ class RandomWalkController(Controller):
         self._waiting_until: float | None = None
         self._moved = False
 
-    def on_install(self, agent: Agent) -> None:
+    def on_install(self, agent: ControlledAgent) -> None:
         """Seed the stream and fix the center."""
         seed = 0 if agent.sim_core is None else agent.sim_core.params.seed
         self._rng = np.random.default_rng([seed, max(agent.object_id, 0), 0x5A17])
         if self.center is None:
             self.center = agent.get_pose().position.copy()
 
-    def compute(self, agent: Agent, dt: float) -> None:
+    def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Pick a new point once the agent has stopped and waited."""
         if agent.is_moving or agent.get_current_action() is not None or self._rng is None:
             return

@@ -17,19 +17,24 @@ import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
 import pybullet as p
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.motion.host import Numbered
 
-__all__ = ["JointInfo", "JointMotion", "JointSet", "ToleranceSpec"]
+__all__ = ["JointInfo", "JointMotion", "JointSet", "JointTargets", "ToleranceSpec"]
 
 logger = logging.getLogger(__name__)
 
+A = TypeVar("A", bound="Numbered")
+"""The agents whose joints move (``Agent`` in a simulation)."""
+
 ToleranceSpec = float | Sequence[float] | Mapping[str, float] | None
+JointTargets = Sequence[float] | Mapping[str, float] | Mapping[int, float]
+"""Joint targets: a list, or a mapping keyed by joint name or index."""
 """A joint tolerance: one value for all joints, one per joint index, or {joint name: value}."""
 
 _MOVABLE = (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC)
@@ -360,7 +365,7 @@ class JointSet:
         )
 
 
-class JointMotion:
+class JointMotion(Generic[A]):
     """Advances the joints of every agent with moving joints, once per step.
 
     Args:
@@ -368,14 +373,14 @@ class JointMotion:
             its joints can check whether they have arrived.
     """
 
-    def __init__(self, wake: Callable[[Agent], None]) -> None:
+    def __init__(self, wake: Callable[[A], None]) -> None:
         self._wake = wake
-        self._active: dict[int, tuple[Agent, JointSet]] = {}
+        self._active: dict[int, tuple[A, JointSet]] = {}
 
     def __len__(self) -> int:
         return len(self._active)
 
-    def activate(self, agent: Agent, joints: JointSet) -> None:
+    def activate(self, agent: A, joints: JointSet) -> None:
         """Start advancing ``agent``'s joints each step (until they arrive)."""
         self._active[agent.object_id] = (agent, joints)
 
@@ -383,7 +388,7 @@ class JointMotion:
         """Object ids of the agents whose joints are moving, ascending."""
         return sorted(self._active)
 
-    def forget(self, agent: Agent) -> None:
+    def forget(self, agent: A) -> None:
         """Stop advancing ``agent`` (it left the simulation)."""
         self._active.pop(agent.object_id, None)
 

@@ -36,6 +36,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.base.config_utils import load_yaml_config, register_class, resolve_class
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.devices import WorkcellPlugin
 from fleet_async.core.managers.agent_manager import AgentManager
@@ -52,7 +53,6 @@ from fleet_async.core.scenario.errors import (
     where_prefix,
 )
 from fleet_async.core.scenario.missions import MissionSpec, parse_missions
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin
 
 if TYPE_CHECKING:

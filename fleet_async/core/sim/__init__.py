@@ -1,4 +1,4 @@
-"""The simulation kernel: the clock, the step loop as named phases, parameters, plugins,
+"""The simulation kernel: the clock, the step loop as named phases, plugins,
 profiling.
 
 May import ``agents`` and below.

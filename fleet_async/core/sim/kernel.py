@@ -32,6 +32,7 @@ import numpy as np
 
 from fleet_async.core.agents.fleet import FleetMotion
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.collision.api import CollisionApi
 from fleet_async.core.collision.system import CollisionSystem
@@ -39,7 +40,6 @@ from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
 from fleet_async.core.sim.idle import IdleApi, IdleSteps
 from fleet_async.core.sim.objects_api import ObjectsApi
-from fleet_async.core.sim.params import SimulationParams
 from fleet_async.core.sim.plugins import SimPlugin, as_plugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
 from fleet_async.core.sim.pybullet_view import PyBulletViewApi
@@ -49,6 +49,7 @@ from fleet_async.core.world.state import KinematicState
 from fleet_async.core.world.world import World
 
 if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["MotionSystem", "SimulationKernel"]
@@ -99,7 +100,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         sim = cast("MultiRobotSimulationCore", self)
         self._world = World(sim, self._backend, self.events, self._params.physics)
         self._fleet = FleetMotion(sim)
-        self._collision = CollisionSystem(sim, self._push_dirty)
+        self._collision = CollisionSystem(self, self._push_dirty)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
@@ -161,7 +162,13 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         return self._fleet
 
     @property
-    def joint_motion(self) -> JointMotion:
+    def action_time(self) -> float:
+        """The action queues' clock (s): the sim time the actions being advanced run at, which
+        inside a step is that step's end for a timed action that ends with it."""
+        return self._fleet.actions.now
+
+    @property
+    def joint_motion(self) -> JointMotion[Agent]:
         """Moves URDF agents' joints towards their targets each step."""
         return self._joint_motion
 

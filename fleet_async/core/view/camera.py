@@ -1,6 +1,6 @@
 """Camera views framed on the scene, shared by the GIF / MP4 recorder and the GUI.
 
-A :class:`SceneCamera` turns a checked ``camera_config`` (``sim/camera_config.py``) into a
+A :class:`SceneCamera` turns a checked ``camera_config`` (``base/camera_config.py``) into a
 ``(distance, yaw, pitch, target)`` view for each frame:
 
 - ``auto`` / ``top_down`` / ``orbit`` frame every body's extent seen so far in the run: the
@@ -25,10 +25,10 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 import pybullet as p
 
-from fleet_async.core.sim.camera_config import CameraConfig
+from fleet_async.core.base.camera_config import CameraConfig
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.base.params import SimulationParams
     from fleet_async.core.world.state import KinematicState
 
 __all__ = [

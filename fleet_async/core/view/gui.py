@@ -14,12 +14,12 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 import pybullet as p
 
+from fleet_async.core.base.camera_config import CAMERA_KEYS, parse_camera_config
 from fleet_async.core.base.events import SimEvents
-from fleet_async.core.sim.camera_config import CAMERA_KEYS, parse_camera_config
 from fleet_async.core.view.camera import DEFAULT_FOV_DEG, CameraView, SceneCamera, box_view
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.base.params import SimulationParams
     from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.core.world.state import KinematicState
 

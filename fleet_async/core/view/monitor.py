@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 from fleet_async.core.world.backend import display_available
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.base.params import SimulationParams
     from fleet_async.core.world.world import World
 
 __all__ = ["DataMonitor", "MonitorApi", "SimulationMonitor"]

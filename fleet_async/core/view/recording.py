@@ -36,8 +36,9 @@ from typing import TYPE_CHECKING, Any, Protocol, cast
 import numpy as np
 import pybullet as p
 
+from fleet_async.core.base.camera_config import CAMERA_MODES as CONFIG_CAMERA_MODES
 from fleet_async.core.base.events import EventBus, SimEvents
-from fleet_async.core.sim.camera_config import CAMERA_MODES as CONFIG_CAMERA_MODES
+from fleet_async.core.base.steps import steps_for
 from fleet_async.core.view.camera import (
     DEFAULT_FOV_DEG,
     CameraSim,
@@ -48,7 +49,7 @@ from fleet_async.core.view.camera import (
 from fleet_async.core.view.video_writers import WRITERS as _WRITERS
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.base.params import SimulationParams
 
 __all__ = ["CAMERA_MODES", "TIME_BASES", "RecordableSim", "RecordingApi", "SimulationRecorder"]
 
@@ -56,7 +57,7 @@ logger = logging.getLogger(__name__)
 
 CAMERA_MODES = ("auto", "gui", *CONFIG_CAMERA_MODES[1:])
 """Recorder camera modes: ``auto`` (the simulation's ``camera_config``; the GUI's camera when
-there is a GUI), ``gui`` and the ``camera_config`` modes (``sim/camera_config.py``)."""
+there is a GUI), ``gui`` and the ``camera_config`` modes (``base/camera_config.py``)."""
 TIME_BASES = ("sim", "real")
 GIF_MAX_FPS = 50
 """GIF delays are whole 1/100 s and players slow down delays under 2/100 s."""
@@ -112,7 +113,7 @@ class SimulationRecorder:
             of it), and becomes ``"gui"`` when the simulation has a GUI; ``"gui"`` follows the
             GUI's camera; ``"top_down"``, ``"orbit"`` (the auto view with the yaw turning),
             ``"fleet"`` (the agents' extent now) and ``"follow:NAME"`` are
-            ``camera_config``'s modes with its other keys (``sim/camera_config.py``);
+            ``camera_config``'s modes with its other keys (``base/camera_config.py``);
             ``"manual"`` uses ``camera_params``.
         time_base: ``"sim"`` or ``"real"``: the clock ``fps`` and ``duration`` refer to.
         orbit_degrees: ``"orbit"`` only: degrees the camera turns over ``duration``, or every
@@ -362,7 +363,7 @@ class SimulationRecorder:
             timestep = self._sim.params.timestep
             due = math.floor(self._steps * self._fps * timestep + _EPS) + 1
             done = self._duration is not None and (
-                self._steps >= math.ceil(self._duration / timestep - _EPS)
+                self._steps >= steps_for(self._duration, timestep)
             )
         else:
             elapsed = self._clock() - self._wall0

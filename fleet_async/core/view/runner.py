@@ -16,10 +16,12 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from fleet_async.core.base.steps import steps_for
+
 if TYPE_CHECKING:
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
-__all__ = ["RealTimePacer", "run_loop", "run_steps", "steps_for"]
+__all__ = ["RealTimePacer", "run_loop", "run_steps"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,12 +66,6 @@ class RealTimePacer:
             return 1
         behind_steps = math.floor(-ahead * self.target_rtf / timestep) + 1
         return max(1, min(behind_steps, self.max_steps_per_frame))
-
-
-def steps_for(duration: float, timestep: float) -> int:
-    """The fewest whole steps of ``timestep`` covering ``duration`` (both in sim seconds)."""
-    # The tolerance absorbs float error such as 0.3 / 0.1 = 2.9999999999999996.
-    return math.ceil(duration / timestep - 1e-9)
 
 
 def run_steps(

@@ -26,7 +26,7 @@ from fleet_async.core.world.shapes import clear_shape_cache, forget_body_shape
 from fleet_async.core.world.state import KinematicState
 
 if TYPE_CHECKING:
-    from fleet_async.core.sim.params import SimulationParams
+    from fleet_async.core.base.params import SimulationParams
 
 __all__ = ["PyBulletBackend", "display_available", "native_output_logged"]
 

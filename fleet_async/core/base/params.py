@@ -7,13 +7,13 @@ from dataclasses import dataclass, fields
 from pathlib import Path as FsPath
 from typing import Any
 
+from fleet_async.core.base.camera_config import CameraConfig, parse_camera_config
 from fleet_async.core.base.config_utils import dataclass_from_dict, load_yaml_config
 from fleet_async.core.base.types import (
     CollisionDetectionMethod,
     SpatialHashCellSizeMode,
     coerce_enum,
 )
-from fleet_async.core.sim.camera_config import CameraConfig, parse_camera_config
 
 __all__ = ["LOG_LEVELS", "SimulationParams"]
 
@@ -51,7 +51,7 @@ class SimulationParams:
         gui_min_fps: Minimum GUI redraw rate while pacing.
         camera_config: What the GUI camera and recordings look at: ``camera_mode`` (auto,
             top_down, orbit, fleet, follow:NAME, manual) and the reference API's other
-            ``camera_*`` keys; see ``sim/camera_config.py``.
+            ``camera_*`` keys; see ``base/camera_config.py``.
         seed: Seed of the simulation's random generator (``sim.rng``).
         enable_collision_shapes: GUI: draw collision shapes instead of visual ones.
         enable_structure_transparency: GUI: draw static structures (the world) see-through.
@@ -233,7 +233,7 @@ class SimulationParams:
 
     @property
     def camera(self) -> CameraConfig:
-        """``camera_config`` checked and parsed (``sim/camera_config.py``)."""
+        """``camera_config`` checked and parsed (``base/camera_config.py``)."""
         return parse_camera_config(self.camera_config, "SimulationParams.camera_config")
 
     @property
