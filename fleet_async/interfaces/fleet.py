@@ -18,13 +18,13 @@ waits for a network.
 from __future__ import annotations
 
 import logging
-import math
 import threading
 from collections import defaultdict, deque
 from collections.abc import Iterable, Sequence
 from typing import Any, Protocol
 
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.steps import steps_for
 from fleet_async.interfaces.commands import Command, command_from_json
 from fleet_async.interfaces.snapshot import VehicleSnapshot
 from fleet_async.interfaces.vehicle import Vehicle
@@ -48,7 +48,7 @@ class FleetListener(Protocol):
 
 
 def _steps(seconds: float, timestep: float) -> int:
-    return max(1, math.ceil(seconds / timestep - 1e-9))
+    return max(1, steps_for(seconds, timestep))  # a period shorter than a step: every step
 
 
 class FleetInterface:

@@ -23,7 +23,6 @@ from collections.abc import Callable
 from typing import Any
 
 from fleet_async.core.actions.action import Action
-from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.base.types import ActionStatus, MotionMode
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.interfaces.commands import (
@@ -36,12 +35,12 @@ from fleet_async.interfaces.commands import (
     Task,
 )
 from fleet_async.interfaces.driving import Drive, plan_drive
+from fleet_async.interfaces.loads import load_action, loads_of
 from fleet_async.interfaces.order_check import check_order
 from fleet_async.interfaces.snapshot import (
     TaskProgress,
     TaskStatus,
     VehicleError,
-    VehicleLoad,
     VehicleSnapshot,
 )
 
@@ -64,9 +63,6 @@ INSTANT_TASKS = frozenset(
 """Task kinds an instant command may carry."""
 
 _ORDER_ERRORS = frozenset({"validation", "order", "order_update", "no_order_to_cancel"})
-
-PICK_REACH = 1.0
-"""m: how far from the vehicle a pick looks for its load."""
 
 
 class Vehicle:
@@ -124,10 +120,6 @@ class Vehicle:
         yaw = pose.yaw
         v = agent.velocity
         c, s = math.cos(yaw), math.sin(yaw)
-        loads = tuple(
-            VehicleLoad(obj.name or str(obj.object_id), _mass(obj))
-            for obj in agent.get_attached_objects()
-        )
         host = self._host
         return VehicleSnapshot(
             name=self.name,
@@ -152,7 +144,7 @@ class Vehicle:
             tasks=tuple(
                 TaskProgress(t.task_id, t.kind, st, d) for t, st, d in self._tasks.values()
             ),
-            loads=loads,
+            loads=loads_of(agent),
             errors=tuple(self.errors),
             distance_since_last_node=self._distance,
         )
@@ -441,34 +433,13 @@ class Vehicle:
             self._set(task, TaskStatus.FINISHED if problem is None else TaskStatus.FAILED,
                       problem or "")  # fmt: skip
             return
-        action = self._make_action(task)
+        action = load_action(task, self.agent, self._host.objects)
         if isinstance(action, str):
             self._set(task, TaskStatus.FAILED, action)
             return
         self.agent.add_action(action)
         self._running = (task, action)
         self._set(task, TaskStatus.RUNNING)
-
-    def _make_action(self, task: Task) -> Action | str:
-        here = self.agent.get_pose()
-        if task.kind == "drop":
-            carried = list(self.agent.get_attached_objects())
-            if not carried:
-                return "the vehicle carries nothing to drop"
-            return DropAction(drop_pose=here, use_approach=False, place_gently=True)
-        load_id = task.params.get("load_id")
-        candidates = [
-            o for o in self._host.objects
-            if getattr(o, "pickable", False) and not o.is_attached() and o is not self.agent
-            and (load_id is None or o.name == load_id)
-        ]  # fmt: skip
-        if not candidates:
-            return f"no pickable object named {load_id!r}" if load_id else "nothing to pick"
-        target = min(candidates, key=lambda o: _distance_xy(o.get_pose(), here))
-        away = _distance_xy(target.get_pose(), here)
-        if away > PICK_REACH:
-            return f"the load {target.name!r} is {away:.2f} m away (reach {PICK_REACH:g} m)"
-        return PickAction(target_object_id=target, use_approach=False, pick_offset=away)
 
     def _check_running(self) -> bool:
         """Whether the running task has ended (its state updated)."""
@@ -491,12 +462,3 @@ class Vehicle:
     def _xy(self) -> tuple[float, float]:
         pose = self.agent.get_pose()
         return pose.x, pose.y
-
-
-def _distance_xy(a: Pose, b: Pose) -> float:
-    return math.hypot(a.x - b.x, a.y - b.y)
-
-
-def _mass(obj: Any) -> float | None:
-    mass = getattr(obj, "mass", None)
-    return float(mass) if isinstance(mass, (int, float)) and mass > 0 else None

@@ -123,7 +123,8 @@ def _drive(sim: Any, duration: float | None) -> None:
     """Step (paced) with the scenario's missions, if any, for ``duration`` s or forever."""
     specs: Sequence[Any] = sim.scenario_missions
     if not specs:
-        from fleet_async.core.view.runner import run_steps, steps_for
+        from fleet_async.core.base.steps import steps_for
+        from fleet_async.core.view.runner import run_steps
 
         steps = None if duration is None else steps_for(duration, sim.params.timestep)
         run_steps(sim, steps)
