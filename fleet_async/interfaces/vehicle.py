@@ -379,10 +379,18 @@ class Vehicle:
     # ----- progress ---------------------------------------------------------------------------
 
     def advance(self) -> None:
-        """Follow up on what the vehicle is doing (at a step boundary)."""
-        x, y = self._xy()
-        self._distance += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
-        self._last_xy = (x, y)
+        """Follow up on what the vehicle is doing (at a step boundary).
+
+        An idle vehicle (no drive, no task, nothing released to drive to) costs one check: a
+        served fleet of thousands mostly waits.
+        """
+        if self._drive is None and self._running is None and not self._pending:
+            if self.paused or not (self._edges and self._edges[0].released):
+                return
+        if self._drive is not None:
+            x, y = self._xy()
+            self._distance += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
+            self._last_xy = (x, y)
         if self._running is not None and not self._check_running():
             return
         if self._drive is not None:
@@ -408,6 +416,7 @@ class Vehicle:
             return
         drive = plan_drive(self._edges, self._nodes, self.agent)
         self._drive = drive
+        self._last_xy = self._xy()
         drive.start(self.agent, self._host)
         self._notify("driving")
 
