@@ -2,7 +2,8 @@
 
 A served vehicle picks and drops where it stands (at the node it reached): a pick attaches the
 nearest pickable object within :data:`PICK_REACH` (the object named by the task's ``load_id``
-when it gives one) without driving to it; a drop puts what it carries down at its own pose.
+when it gives one) without driving to it; a drop puts what it carries down where it stands, at
+the height the load had when it was picked.
 """
 
 from __future__ import annotations
@@ -27,19 +28,26 @@ def _distance_xy(a: Pose, b: Pose) -> float:
     return math.hypot(a.x - b.x, a.y - b.y)
 
 
-def load_action(task: Task, agent: Any, objects: Iterable[Any]) -> Action | str:
+def load_action(
+    task: Task, agent: Any, objects: Iterable[Any], rest_heights: dict[int, float]
+) -> Action | str:
     """The PickAction / DropAction for ``task`` (``"pick"`` or ``"drop"``), or why none.
 
     Args:
         task: The task.
         agent: The vehicle's robot.
         objects: Every object of the simulation (where a pick looks for its load).
+        rest_heights: ``{object id: z}`` where loads stood when picked: a pick adds to it, a
+            drop puts the load down at that height (else at the robot's own).
     """
     here = agent.get_pose()
     if task.kind == "drop":
-        if not list(agent.get_attached_objects()):
+        carried = list(agent.get_attached_objects())
+        if not carried:
             return "the vehicle carries nothing to drop"
-        return DropAction(drop_pose=here, use_approach=False, place_gently=True)
+        z = rest_heights.pop(carried[0].object_id, here.z)
+        where = Pose.from_yaw(here.x, here.y, z, here.yaw)
+        return DropAction(drop_pose=where, use_approach=False, place_gently=True)
     load_id = task.params.get("load_id")
     candidates = [
         o
@@ -55,6 +63,7 @@ def load_action(task: Task, agent: Any, objects: Iterable[Any]) -> Action | str:
     away = _distance_xy(target.get_pose(), here)
     if away > PICK_REACH:
         return f"the load {target.name!r} is {away:.2f} m away (reach {PICK_REACH:g} m)"
+    rest_heights[target.object_id] = target.get_pose().z
     return PickAction(target_object_id=target, use_approach=False, pick_offset=away)
 
 

@@ -105,6 +105,7 @@ class Vehicle:
         self._last_xy = self._xy()
         self._distance = 0.0
         self.factsheet_requested = False
+        self._rest_heights: dict[int, float] = {}  # loads carried: where they stood (z, m)
 
     # ----- reading --------------------------------------------------------------------------
 
@@ -384,9 +385,9 @@ class Vehicle:
         An idle vehicle (no drive, no task, nothing released to drive to) costs one check: a
         served fleet of thousands mostly waits.
         """
-        if self._drive is None and self._running is None and not self._pending:
-            if self.paused or not (self._edges and self._edges[0].released):
-                return
+        idle = self._drive is None and self._running is None and not self._pending
+        if idle and (self.paused or not (self._edges and self._edges[0].released)):
+            return
         if self._drive is not None:
             x, y = self._xy()
             self._distance += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
@@ -442,7 +443,7 @@ class Vehicle:
             self._set(task, TaskStatus.FINISHED if problem is None else TaskStatus.FAILED,
                       problem or "")  # fmt: skip
             return
-        action = load_action(task, self.agent, self._host.objects)
+        action = load_action(task, self.agent, self._host.objects, self._rest_heights)
         if isinstance(action, str):
             self._set(task, TaskStatus.FAILED, action)
             return

@@ -237,7 +237,7 @@ def test_pick_at_one_node_and_drop_at_another(served):
     assert carried and carried[0][0].load_id == "tote"
     assert link.latest("r0").loads == ()
     pose = tote.get_pose()
-    assert (pose.x, pose.y) == pytest.approx((2.0, 2.0), abs=1e-6)
+    assert (pose.x, pose.y, pose.z) == pytest.approx((2.0, 2.0, 0.1), abs=1e-6)  # as it stood
     assert not tote.is_attached() and agent.get_attached_objects() == []
 
 

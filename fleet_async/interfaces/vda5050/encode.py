@@ -19,7 +19,7 @@ from fleet_async.interfaces.vda5050.config import (
     vda_action_type,
 )
 
-__all__ = ["Header", "connection", "factsheet", "state", "timestamp", "visualization"]
+__all__ = ["Header", "connection", "state", "timestamp", "visualization"]
 
 _STATUS = {
     TaskStatus.WAITING: "WAITING",
@@ -142,10 +142,3 @@ def visualization(header: dict[str, Any], snap: VehicleSnapshot, map_id: str) ->
 def connection(header: dict[str, Any], connection_state: str) -> dict[str, Any]:
     """A ``connection`` message: ``"ONLINE"``, ``"OFFLINE"`` or ``"CONNECTIONBROKEN"``."""
     return {**header, "connectionState": connection_state}
-
-
-def factsheet(header: dict[str, Any], robot: Any, config: Vda5050Config) -> dict[str, Any]:
-    """The ``factsheet`` of ``robot``, from its motion limits, footprint and actions."""
-    from fleet_async.interfaces.vda5050.factsheet import describe
-
-    return {**header, **describe(robot, config)}

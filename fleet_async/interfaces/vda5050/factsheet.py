@@ -1,7 +1,8 @@
 """A served robot's VDA 5050 factsheet: what it is and what it can do, from the simulation.
 
 Kinematics from its controller (differential -> ``DIFF``, else ``OMNI``), speeds and
-accelerations from its limits, width / length / height from its bounding box, the actions the
+accelerations from its limits, length / width / height from its visual shapes in its own frame
+(the footprint the viewer draws: the same whichever way the robot faces), the actions the
 fleet interface runs, and the payload limit the decoder enforces.
 """
 
@@ -10,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from fleet_async.core.base.types import MotionMode
+from fleet_async.core.view.trace.footprints import describe_body
 from fleet_async.interfaces.vda5050.config import Vda5050Config
 from fleet_async.interfaces.vda5050.decode import MAX_PAYLOAD_BYTES
 
@@ -88,6 +90,17 @@ def _actions(version: str) -> list[dict[str, Any]]:
     ]
 
 
+def _size(robot: Any) -> tuple[float, float, float]:
+    """Length, width and height (m) of the robot in its own frame (its visual shapes)."""
+    footprint, _ = describe_body(robot, robot.sim_core.world, {})
+    low, high = footprint["z"]
+    if footprint["type"] == "circle":
+        side = 2.0 * float(footprint["radius"])
+        return side, side, float(high - low)
+    half = footprint["half"]
+    return 2.0 * float(half[0]), 2.0 * float(half[1]), float(high - low)
+
+
 def _limit(value: Any) -> float:
     return float(max(value)) if isinstance(value, (tuple, list)) else float(value)
 
@@ -95,10 +108,7 @@ def _limit(value: Any) -> float:
 def describe(robot: Any, config: Vda5050Config) -> dict[str, Any]:
     """The factsheet body (without the header) of ``robot``."""
     params = robot.controller_params
-    sim = robot.sim_core
-    bounds = None if sim is None else sim.get_aabb_bounds([robot.object_id])
-    lo, hi = bounds if bounds is not None else ([0.0, 0.0, 0.0], [0.5, 0.5, 0.5])
-    length, width = float(hi[0] - lo[0]), float(hi[1] - lo[1])
+    length, width, height = _size(robot)
     accel = _limit(params.max_linear_accel)
     kinematic = "DIFF" if robot.motion_mode is MotionMode.DIFFERENTIAL else "OMNI"
     return {
@@ -117,7 +127,7 @@ def describe(robot: Any, config: Vda5050Config) -> dict[str, Any]:
             "accelerationMax": accel,
             "decelerationMax": accel,
             "heightMin": 0.0,
-            "heightMax": float(hi[2] - lo[2]),
+            "heightMax": height,
             "width": width,
             "length": length,
         },

@@ -22,11 +22,13 @@ from dataclasses import dataclass
 from typing import Any
 from urllib.parse import urlsplit
 
+from fleet_async.interfaces.commands import Rejection
 from fleet_async.interfaces.fleet import FleetInterface
 from fleet_async.interfaces.snapshot import VehicleSnapshot
 from fleet_async.interfaces.vda5050 import encode
 from fleet_async.interfaces.vda5050.config import Vda5050Config
 from fleet_async.interfaces.vda5050.decode import decode
+from fleet_async.interfaces.vda5050.factsheet import describe
 
 __all__ = ["BrokerAddress", "MqttTransport", "TransportStats"]
 
@@ -115,6 +117,7 @@ class _Link:
         client.reconnect_delay_set(min_delay=1, max_delay=8)
         client.on_connect = self._on_connect
         client.on_disconnect = self._on_disconnect
+        client.on_subscribe = self._on_subscribe
         client.on_message = self._on_message
         self.client = client
 
@@ -123,12 +126,12 @@ class _Link:
             logger.warning("%s: the broker refused the connection: %s", self.serial, reason)
             return
         config = self.transport.config
-        client.subscribe(
-            [
-                (config.topic(self.serial, "order"), 0),
-                (config.topic(self.serial, "instantActions"), 0),
-            ]
-        )
+        topics = [config.topic(self.serial, name) for name in ("order", "instantActions")]
+        client.subscribe([(topic, 0) for topic in topics])
+
+    def _on_subscribe(self, client: Any, userdata: Any, mid: Any, codes: Any, props: Any) -> None:
+        # Online once the broker confirmed the subscriptions: what a master sends after the
+        # ONLINE message is heard.
         self.transport.announce(self)
         self.transport.stats.connects += 1
         self.connected.set()
@@ -142,10 +145,18 @@ class _Link:
 
     def _on_message(self, client: Any, userdata: Any, message: Any) -> None:
         topic = message.topic.rsplit("/", 1)[-1]
-        command = decode(topic, bytes(message.payload), self.transport.config, self.serial)
+        try:
+            command = decode(topic, bytes(message.payload), self.transport.config, self.serial)
+        except Exception as exc:  # a message must never take the vehicle's link down
+            logger.exception("%s: a %s message could not be read", self.serial, topic)
+            command = Rejection(
+                "validation",
+                f"{topic}: could not be read ({type(exc).__name__}: {str(exc)[:160]})",
+                (("topic", topic),),
+            )
         stats = self.transport.stats
         stats.received += 1
-        if type(command).__name__ == "Rejection":
+        if isinstance(command, Rejection):
             stats.rejected += 1
         self.transport.fleet.submit(self.robot, command)
 
@@ -197,6 +208,11 @@ class MqttTransport:
         self.stopping = False
         self.serials = self.config.assign_serials(list(fleet.vehicles))
         self._map_ids: dict[str, str] = {}
+        # What each vehicle is, read now on the simulation's thread (a reconnect republishes it
+        # from paho's thread, which must not touch the simulation).
+        self._factsheets = {
+            robot: describe(fleet.vehicles[robot].agent, self.config) for robot in self.serials
+        }
         self._links = {robot: _Link(self, robot, serial) for robot, serial in self.serials.items()}
         self._started = False
 
@@ -215,6 +231,7 @@ class MqttTransport:
                 raise ConnectionError(f"MQTT broker {self.address.url}: {exc}") from exc
             link.client.loop_start()
         self._started = True
+        self.stopping = False
         self.fleet.add_listener(self)
         deadline = time.monotonic() + timeout
         for link in self._links.values():
@@ -274,8 +291,7 @@ class MqttTransport:
         self._publish_factsheet(link)
 
     def _publish_factsheet(self, link: _Link) -> None:
-        agent = self.fleet.vehicles[link.robot].agent
-        body = encode.factsheet(self._header(link, "factsheet"), agent, self.config)
+        body = {**self._header(link, "factsheet"), **self._factsheets[link.robot]}
         link.client.publish(self.config.topic(link.serial, "factsheet"), json.dumps(body), 0, True)
 
     def on_state(self, snapshot: VehicleSnapshot, reasons: tuple[str, ...]) -> None:

@@ -7,6 +7,7 @@ a patched copy in ``schemas/fixed/`` is used instead (its README says what and w
 
 from __future__ import annotations
 
+import itertools
 import json
 from functools import cache
 from importlib import resources
@@ -52,12 +53,13 @@ def validation_errors(version: str, message: str, data: Any, limit: int = 3) -> 
 
     Each problem names the field's path (``nodes[0].nodePosition.x``) and what was expected.
     """
+    # The first few errors only: sorting them all would let one large bad message hold the
+    # network thread for as long as it takes to list a million of them.
+    errors = itertools.islice(_validator(version, message).iter_errors(data), limit)
     problems = []
-    for error in sorted(_validator(version, message).iter_errors(data), key=lambda e: e.path):
+    for error in errors:
         where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in error.path)
         problems.append(f"{where.lstrip('.') or '(message)'}: {_short(error.message)}")
-        if len(problems) >= limit:
-            break
     return problems
 
 
