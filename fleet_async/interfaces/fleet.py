@@ -29,7 +29,7 @@ from fleet_async.interfaces.commands import Command, command_from_json
 from fleet_async.interfaces.snapshot import VehicleSnapshot
 from fleet_async.interfaces.vehicle import Vehicle
 
-__all__ = ["FleetInterface", "FleetListener", "replay_commands"]
+__all__ = ["FleetInterface", "FleetListener", "replay_commands", "trace_state"]
 
 logger = logging.getLogger(__name__)
 
@@ -187,7 +187,18 @@ class FleetInterface:
             vehicle.advance()
         self._report(step)
 
+    def _trace_states(self) -> None:
+        """A ``vehicle_state`` trace event for each vehicle whose order or tasks changed."""
+        tracer = self.sim.tracer
+        if tracer is None:
+            return
+        for name, reasons in self._reasons.items():
+            if reasons:
+                vehicle = self.vehicles[name]
+                tracer.event("vehicle_state", vehicle.agent.object_id, **trace_state(vehicle))
+
     def _report(self, step: int) -> None:
+        self._trace_states()
         periodic = step % self._state_every == 0
         visual = self._viz_every and step % self._viz_every == 0
         if not (self._listeners and (periodic or visual or any(self._reasons.values()))):
@@ -211,6 +222,25 @@ class FleetInterface:
                 for listener in self._listeners:
                     listener.on_visualization(snap)
             reasons.clear()
+
+
+def trace_state(vehicle: Vehicle) -> dict[str, Any]:
+    """What the trace's ``vehicle_state`` event says of ``vehicle`` (docs/trace-format.md)."""
+    snap = vehicle.snapshot()
+    return {
+        "vehicle": snap.name,
+        "order_id": snap.order_id,
+        "order_update": snap.order_update,
+        "last_node": snap.last_node_id,
+        "nodes": [
+            [n, seq, rel, round(x, 4), round(y, 4)]
+            for (n, seq, rel), (x, y) in zip(snap.nodes, snap.node_positions, strict=True)
+        ],
+        "edges": [[e, seq, rel] for e, seq, rel in snap.edges],
+        "tasks": [[t.task_id, t.kind, t.status.value] for t in snap.tasks],
+        "paused": snap.paused,
+        "errors": [[e.kind, e.description] for e in snap.errors],
+    }
 
 
 def replay_commands(sim: Any, trace: Any, robots: Iterable[str] | None = None) -> FleetInterface:

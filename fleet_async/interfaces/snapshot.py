@@ -105,6 +105,7 @@ class VehicleSnapshot:
         loads: What it carries.
         errors: Errors not yet resolved.
         distance_since_last_node: m driven since the last node.
+        node_positions: ``(x, y)`` (m) of each of ``nodes``, in the same order.
     """
 
     name: str
@@ -130,3 +131,4 @@ class VehicleSnapshot:
     loads: tuple[VehicleLoad, ...]
     errors: tuple[VehicleError, ...]
     distance_since_last_node: float = 0.0
+    node_positions: tuple[tuple[float, float], ...] = ()

@@ -148,6 +148,7 @@ class Vehicle:
             loads=loads_of(agent),
             errors=tuple(self.errors),
             distance_since_last_node=self._distance,
+            node_positions=tuple((float(n.x or 0.0), float(n.y or 0.0)) for n in self._nodes),
         )
 
     # ----- commands ---------------------------------------------------------------------------

@@ -128,6 +128,11 @@ def test_replaying_the_traced_commands_reproduces_the_run(tmp_path, backend):
     assert all(np.array_equal(a, b) for a, b in zip(poses, again, strict=True))
     replayed = TraceReader(replayed_path)
     assert replayed.events == live.events and replayed.commands == live.commands
+    states = [e for e in live.events if e["kind"] == "vehicle_state"]
+    first = states[0]["data"]
+    assert (states[0]["step"], first["vehicle"], first["order_id"]) == (4, "r0", "a")
+    assert first["nodes"] == [["n1", 2, True, 3.0, 0.0], ["n2", 4, True, 6.0, 0.0],
+                              ["n3", 6, False, 9.0, 0.0]]  # fmt: skip
     # The run did what the script asked: r0 paused, resumed, was updated and reached x = 9.
     assert poses[-1][0][0] == pytest.approx(9.0, abs=1e-9)
     assert 0.0 < poses[-1][1][0] < 4.0  # r1 was cancelled on its way

@@ -79,6 +79,21 @@ def _velocity(snap: VehicleSnapshot) -> dict[str, Any]:
     return {"vx": snap.vx, "vy": snap.vy, "omega": snap.omega}
 
 
+def _node_states(snap: VehicleSnapshot, map_id: str, version: str) -> list[dict[str, Any]]:
+    # 2.0's schema wants a theta in a node state's position, which a node may not have: the
+    # position (optional) is given from 2.1 on.
+    with_position = not version.startswith("2.0")
+    return [
+        {
+            "nodeId": n,
+            "sequenceId": seq,
+            "released": rel,
+            **({"nodePosition": {"x": x, "y": y, "mapId": map_id}} if with_position else {}),
+        }
+        for (n, seq, rel), (x, y) in zip(snap.nodes, snap.node_positions, strict=True)
+    ]
+
+
 def state(
     header: dict[str, Any], snap: VehicleSnapshot, map_id: str, version: str
 ) -> dict[str, Any]:
@@ -96,9 +111,7 @@ def state(
         "paused": snap.paused,
         "distanceSinceLastNode": snap.distance_since_last_node,
         "operatingMode": "AUTOMATIC",
-        "nodeStates": [
-            {"nodeId": n, "sequenceId": seq, "released": rel} for n, seq, rel in snap.nodes
-        ],
+        "nodeStates": _node_states(snap, map_id, version),
         "edgeStates": [
             {"edgeId": e, "sequenceId": seq, "released": rel} for e, seq, rel in snap.edges
         ],
