@@ -25,6 +25,7 @@ from fleet_async.interfaces.snapshot import (
     TaskStatus,
     VehicleError,
     VehicleLoad,
+    VehiclePose,
     VehicleSnapshot,
 )
 from fleet_async.interfaces.vehicle import INSTANT_TASKS, Vehicle
@@ -47,6 +48,7 @@ __all__ = [
     "Vehicle",
     "VehicleError",
     "VehicleLoad",
+    "VehiclePose",
     "VehicleSnapshot",
     "command_from_json",
     "replay_commands",

@@ -23,10 +23,12 @@ from collections import defaultdict, deque
 from collections.abc import Iterable, Sequence
 from typing import Any, Protocol
 
+import numpy as np
+
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.steps import steps_for
 from fleet_async.interfaces.commands import Command, command_from_json
-from fleet_async.interfaces.snapshot import VehicleSnapshot
+from fleet_async.interfaces.snapshot import VehiclePose, VehicleSnapshot
 from fleet_async.interfaces.vehicle import Vehicle
 
 __all__ = ["FleetInterface", "FleetListener", "replay_commands", "trace_state"]
@@ -40,7 +42,7 @@ class FleetListener(Protocol):
     def on_state(self, snapshot: VehicleSnapshot, reasons: tuple[str, ...]) -> None:
         """A state to report: ``reasons`` says why (``("periodic",)`` for the timer)."""
 
-    def on_visualization(self, snapshot: VehicleSnapshot) -> None:
+    def on_visualization(self, pose: VehiclePose) -> None:
         """A pose update at the visualization rate."""
 
     def on_factsheet_request(self, vehicle: str) -> None:
@@ -199,29 +201,53 @@ class FleetInterface:
 
     def _report(self, step: int) -> None:
         self._trace_states()
+        changed = [name for name, reasons in self._reasons.items() if reasons]
         periodic = step % self._state_every == 0
-        visual = self._viz_every and step % self._viz_every == 0
-        if not (self._listeners and (periodic or visual or any(self._reasons.values()))):
-            for reasons in self._reasons.values():
-                reasons.clear()
-            return
-        for name, vehicle in self.vehicles.items():
-            reasons = self._reasons[name]
-            if not (reasons or periodic or visual):
-                continue
-            snap = vehicle.snapshot()
-            if reasons or periodic:
-                why = tuple(dict.fromkeys(reasons)) if reasons else ("periodic",)
-                for listener in self._listeners:
-                    listener.on_state(snap, why)
-                if vehicle.factsheet_requested:
-                    vehicle.factsheet_requested = False
+        if self._listeners:
+            for name in self.vehicles if periodic else changed:
+                self._report_state(name)
+            if self._viz_every and step % self._viz_every == 0:
+                for pose in self.poses():
                     for listener in self._listeners:
-                        listener.on_factsheet_request(name)
-            if visual:
-                for listener in self._listeners:
-                    listener.on_visualization(snap)
-            reasons.clear()
+                        listener.on_visualization(pose)
+        for name in changed:
+            self._reasons[name].clear()
+
+    def _report_state(self, name: str) -> None:
+        vehicle, reasons = self.vehicles[name], self._reasons[name]
+        snap = vehicle.snapshot()
+        why = tuple(dict.fromkeys(reasons)) if reasons else ("periodic",)
+        for listener in self._listeners:
+            listener.on_state(snap, why)
+        if vehicle.factsheet_requested:
+            vehicle.factsheet_requested = False
+            for listener in self._listeners:
+                listener.on_factsheet_request(name)
+
+    def poses(self) -> list[VehiclePose]:
+        """Every served vehicle's pose and velocity now, read from the state store at once."""
+        sim = self.sim
+        store = sim.state
+        rows = np.fromiter(
+            (v.agent.state_row for v in self.vehicles.values()), np.int64, len(self.vehicles)
+        )
+        qx, qy, qz, qw = store.orientation[rows].T
+        yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+        velocity = store.velocity[rows]
+        c, s = np.cos(yaw), np.sin(yaw)
+        columns = (
+            store.position[rows, 0].tolist(),
+            store.position[rows, 1].tolist(),
+            yaw.tolist(),
+            (c * velocity[:, 0] + s * velocity[:, 1]).tolist(),
+            (c * velocity[:, 1] - s * velocity[:, 0]).tolist(),
+            store.angular_velocity[rows, 2].tolist(),
+        )
+        step, now = sim.step_count, sim.sim_time
+        return [
+            VehiclePose(name, step, now, *values)
+            for name, *values in zip(self.vehicles, *columns, strict=True)
+        ]
 
 
 def trace_state(vehicle: Vehicle) -> dict[str, Any]:

@@ -10,7 +10,7 @@ from collections import defaultdict
 
 from fleet_async.interfaces.commands import Command
 from fleet_async.interfaces.fleet import FleetInterface
-from fleet_async.interfaces.snapshot import VehicleSnapshot
+from fleet_async.interfaces.snapshot import VehiclePose, VehicleSnapshot
 
 __all__ = ["InMemoryTransport"]
 
@@ -58,9 +58,9 @@ class InMemoryTransport:
         if len(log) > self._keep:
             del log[0]
 
-    def on_visualization(self, snapshot: VehicleSnapshot) -> None:
+    def on_visualization(self, pose: VehiclePose) -> None:
         """Count it."""
-        self.visualizations[snapshot.name] += 1
+        self.visualizations[pose.name] += 1
 
     def on_factsheet_request(self, vehicle: str) -> None:
         """Note it."""

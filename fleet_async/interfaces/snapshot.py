@@ -8,12 +8,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
+from typing import NamedTuple
 
 __all__ = [
     "TaskProgress",
     "TaskStatus",
     "VehicleError",
     "VehicleLoad",
+    "VehiclePose",
     "VehicleSnapshot",
 ]
 
@@ -132,3 +134,20 @@ class VehicleSnapshot:
     errors: tuple[VehicleError, ...]
     distance_since_last_node: float = 0.0
     node_positions: tuple[tuple[float, float], ...] = ()
+
+
+class VehiclePose(NamedTuple):
+    """Where a vehicle is and how it moves: what a visualization message says.
+
+    Read for the whole served fleet at once from the state store (``FleetInterface``).
+    """
+
+    name: str
+    step: int
+    sim_time: float
+    x: float
+    y: float
+    theta: float
+    vx: float
+    vy: float
+    omega: float

@@ -46,7 +46,7 @@ def drive_a_valid_order(
     """Send a valid order from where the robot stands to ``x`` further; it must be accepted
     and driven to its end. Returns the state at the end."""
     link = served.transport._links[served.name]
-    assert link.connected.is_set() and link.client._thread.is_alive()
+    assert link.connected.is_set() and served.transport.loop.alive
     x0, y0 = served.xy()
     points = [("a0", x0, y0), ("a1", x0 + x, y0)]
     total = served.count() + 1
@@ -345,10 +345,9 @@ def test_a_2_0_instant_actions_message_without_a_required_field_is_a_validation_
     del body[missing]
     raw_master.send(served.topic("instantActions"), body)
     # Either the vehicle queues a command, or its network thread dies.
-    wait_until(
-        lambda: served.count() or link.client._thread is None, "the message handled (or fatal)"
-    )
-    alive = link.client._thread is not None
+    loop = served.transport.loop
+    wait_until(lambda: served.count() or not loop.alive, "the message handled (or fatal)")
+    alive = loop.alive
     if not alive:  # no OFFLINE at the teardown: nothing would send it (5 s wasted)
         link.connected.clear()
     assert alive, "the vehicle's MQTT network thread died on a message"

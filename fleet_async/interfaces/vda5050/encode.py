@@ -8,6 +8,7 @@ Every message built here validates against the standard's schema of the configur
 from __future__ import annotations
 
 import math
+import threading
 from datetime import datetime, timezone
 from typing import Any
 
@@ -51,11 +52,13 @@ class Header:
         self.serial = serial
         self.epoch = epoch
         self._ids: dict[str, int] = {}
+        self._lock = threading.Lock()  # the simulation's and the network thread both stamp
 
     def make(self, topic: str, sim_time: float) -> dict[str, Any]:
         """The header of the next message on ``topic`` (its headerId counts up by one)."""
-        header_id = self._ids.get(topic, -1) + 1
-        self._ids[topic] = header_id
+        with self._lock:
+            header_id = self._ids.get(topic, -1) + 1
+            self._ids[topic] = header_id
         return {
             "headerId": header_id,
             "timestamp": timestamp(self.epoch, sim_time),
@@ -65,7 +68,7 @@ class Header:
         }
 
 
-def _position(snap: VehicleSnapshot, map_id: str) -> dict[str, Any]:
+def _position(snap: Any, map_id: str) -> dict[str, Any]:
     return {
         "x": snap.x,
         "y": snap.y,
@@ -75,7 +78,7 @@ def _position(snap: VehicleSnapshot, map_id: str) -> dict[str, Any]:
     }
 
 
-def _velocity(snap: VehicleSnapshot) -> dict[str, Any]:
+def _velocity(snap: Any) -> dict[str, Any]:
     return {"vx": snap.vx, "vy": snap.vy, "omega": snap.omega}
 
 
@@ -147,8 +150,8 @@ def state(
     }
 
 
-def visualization(header: dict[str, Any], snap: VehicleSnapshot, map_id: str) -> dict[str, Any]:
-    """The ``visualization`` message of ``snap``."""
+def visualization(header: dict[str, Any], snap: Any, map_id: str) -> dict[str, Any]:
+    """The ``visualization`` message of ``snap`` (a VehiclePose or a VehicleSnapshot)."""
     return {**header, "agvPosition": _position(snap, map_id), "velocity": _velocity(snap)}
 
 

@@ -6,10 +6,10 @@
 "use strict";
 
 const TRACE_MAGIC = "FLEETTRC";
-const TRACE_VERSIONS = [1, 2];  // 2 added COMMANDS (kind 8), which the page skips
+const TRACE_VERSIONS = [1, 2];  // 2 added COMMANDS (kind 8)
 const HEADER_SIZE = 16;
 const RECORD_HEADER = 8;
-const KIND = { META: 1, BODIES: 2, LAYOUT: 3, FRAMES: 4, EVENTS: 5, COLLISIONS: 6, END: 7 };
+const KIND = { META: 1, BODIES: 2, LAYOUT: 3, FRAMES: 4, EVENTS: 5, COLLISIONS: 6, END: 7, COMMANDS: 8 };
 const KIND_NAME = Object.fromEntries(Object.entries(KIND).map(([k, v]) => [v, k]));
 const FLAG_MOVING = 1, FLAG_CARRYING = 2, FLAG_FAILED = 4, FLAG_COLLIDING = 8;
 
@@ -24,6 +24,9 @@ class TraceData {
     this.frames = [];             // {step, t, layout, pos, yaw, flags, colliding}
     this.events = [];             // {t, step, kind, object_id, data}
     this.collisions = [];         // {step, a, b, started}
+    this.commands = [];           // {step, t, vehicle, command}: what fleet masters sent
+    this.vehicleCommands = new Map(); // vehicle name -> its commands, in the order applied
+    this.vehicleStates = new Map();   // object id -> its vehicle_state events, in time order
     this.end = null;
     this.bounds = null;           // [xmin, ymin, xmax, ymax] over every pose of the run
     this.zBounds = null;          // [zmin, zmax]
@@ -47,6 +50,27 @@ class TraceData {
       if (f[mid].t <= t + 1e-9) lo = mid; else hi = mid - 1;
     }
     return lo;
+  }
+  // Index of the last entry of `list` (sorted by .t) at or before sim time t, or -1.
+  static lastAt(list, t) {
+    let lo = 0, hi = list.length - 1, found = -1;
+    while (lo <= hi) {
+      const mid = (lo + hi) >> 1;
+      if (list[mid].t <= t + 1e-9) { found = mid; lo = mid + 1; } else hi = mid - 1;
+    }
+    return found;
+  }
+  // A served vehicle's latest vehicle_state event at or before sim time t, or null.
+  vehicleStateAt(id, t) {
+    const list = this.vehicleStates.get(id);
+    if (!list) return null;
+    const i = TraceData.lastAt(list, t);
+    return i >= 0 ? list[i] : null;
+  }
+  // Whether the body is a served vehicle (it received commands or reported a vehicle state).
+  isServed(body) {
+    if (!body) return false;
+    return this.vehicleStates.has(body.id) || (body.name !== undefined && this.vehicleCommands.has(body.name));
   }
 }
 
@@ -187,6 +211,23 @@ class TraceDecoder {
           d.events.push(e);
           const body = d.bodies.get(id);
           if (body) body.events.push(e);
+          if (k === "vehicle_state" && id !== null) {
+            let list = d.vehicleStates.get(id);
+            if (!list) d.vehicleStates.set(id, (list = []));
+            list.push(e);
+            if (list.length > 1 && list[list.length - 2].t > e.t) list.sort((x, y) => x.t - y.t);
+          }
+        }
+        break;
+      }
+      case KIND.COMMANDS: {
+        const dt = d.timestep;
+        for (const [step, vehicle, command] of this.json(payload, length).commands) {
+          const c = { step, t: step * dt, vehicle, command };
+          d.commands.push(c);
+          let list = d.vehicleCommands.get(vehicle);
+          if (!list) d.vehicleCommands.set(vehicle, (list = []));
+          list.push(c);
         }
         break;
       }
