@@ -93,13 +93,6 @@ TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset(
         ("fleet_async.core.view.trace.api", "fleet_async.core.simulation"),
         ("fleet_async.core.view.trace.events", "fleet_async.core.simulation"),
         ("fleet_async.core.view.trace.writer", "fleet_async.core.simulation"),
-        ("fleet_async.core.world.attachments", "fleet_async.core.bodies.sim_object"),
-        ("fleet_async.core.world.carrying", "fleet_async.core.bodies.sim_object"),
-        ("fleet_async.core.world.carrying", "fleet_async.core.simulation"),
-        ("fleet_async.core.world.pending", "fleet_async.core.bodies.sim_object"),
-        ("fleet_async.core.world.world", "fleet_async.core.bodies.sim_object"),
-        ("fleet_async.core.world.world", "fleet_async.core.bodies.standalone"),
-        ("fleet_async.core.world.world", "fleet_async.core.simulation"),
     }
 )
 """(module, imported module) pairs whose type-only import may point up a floor."""

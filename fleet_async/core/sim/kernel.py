@@ -50,6 +50,7 @@ from fleet_async.core.world.world import World
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.bodies.sim_object import SimObject
     from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["MotionSystem", "SimulationKernel"]
@@ -98,7 +99,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         self._backend.connect()
         # Collaborators are handed the simulation as the class it is always built as.
         sim = cast("MultiRobotSimulationCore", self)
-        self._world = World(sim, self._backend, self.events, self._params.physics)
+        self._world: World[SimObject] = World(sim, self._backend, self.events, self._params.physics)
         self._fleet = FleetMotion(sim)
         self._collision = CollisionSystem(self, self._push_dirty)
         self._callbacks = PeriodicSchedule()
@@ -173,12 +174,12 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         return self._joint_motion
 
     @property
-    def world(self) -> World:
+    def world(self) -> World[SimObject]:
         """Objects, rows and attachments (what SimObject handles call back into)."""
         return self._world
 
     @property
-    def attachments(self) -> AttachmentSet:
+    def attachments(self) -> AttachmentSet[SimObject]:
         """Every parent/child attachment."""
         return self._world.attachments
 
