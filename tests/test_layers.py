@@ -61,7 +61,10 @@ FACADES = (
 
 TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset(
     {
-        # Not yet narrowed to a protocol of the importing floor (issue 32, under way).
+        # The mission seam re-exports, for annotations only, what fleet_async.tasks (which may
+        # import nothing else of the core) annotates with: the simulation class (tasks/run.py,
+        # tasks/runtime.py) and the devices (tasks/devices.py). Not yet narrowed to protocols
+        # of the seam (issue 32): each would list what the mission layer uses of them.
         ("fleet_async.core.missions", "fleet_async.core.devices"),
         ("fleet_async.core.missions", "fleet_async.core.simulation"),
     }
