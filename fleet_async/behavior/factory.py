@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.behavior.builtin_nodes import BUILTIN_MODELS
 from fleet_async.behavior.fleet_nodes import FLEET_MODELS
@@ -137,7 +137,9 @@ class BehaviorTreeFactory:
     ) -> BehaviorTree:
         """Load a tree from XML text; see :meth:`create_tree_from_file`."""
         root, main = load_document(parse_xml(text, source), source, self._models, tree_id)
-        sim = sim if sim is not None else (agent.sim_core if agent is not None else None)
+        if sim is None and agent is not None:
+            # An agent names its simulation by the protocol of its floor; it is the whole one.
+            sim = cast("MultiRobotSimulationCore | None", agent.sim_core)
         if sim is None:
             raise ValueError(f"{source}: a tree needs a simulation: pass sim= or agent=")
         return BehaviorTree(root, main, sim, agent, Blackboard(blackboard))

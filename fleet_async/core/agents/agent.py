@@ -34,13 +34,13 @@ from fleet_async.core.motion.joints import JointSet
 from fleet_async.core.world.link_colours import one_colour_per_link
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.agents.host import AgentHost
 
 __all__ = ["Agent", "AgentSpawnParams", "IKParams"]
 
 
 def _construct_or_remove_body(
-    cls: type[Agent], sim_core: MultiRobotSimulationCore | None, body: int, **kwargs: Any
+    cls: type[Agent], sim_core: AgentHost | None, body: int, **kwargs: Any
 ) -> Agent:
     """Build the agent around a body this module created; remove the body if that fails."""
     try:
@@ -94,6 +94,8 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     (doors, lifts, workcells) are agents that are not."""
     spawned_event: ClassVar[str | None] = SimEvents.AGENT_SPAWNED
     removed_event: ClassVar[str | None] = SimEvents.AGENT_REMOVED
+    sim_core: AgentHost | None
+    """The simulation the agent is in (None outside one or once removed)."""
 
     def __init__(
         self,
@@ -102,7 +104,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         motion_mode: MotionMode | str = MotionMode.DIFFERENTIAL,
         use_fixed_base: bool = False,
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: AgentHost | None = None,
         name: str | None = None,
         user_data: dict[str, Any] | None = None,
         mass: float | None = None,
@@ -138,7 +140,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
 
     @classmethod
     def from_params(  # type: ignore[override]  # takes AgentSpawnParams, as the seed
-        cls, spawn_params: AgentSpawnParams, sim_core: MultiRobotSimulationCore | None = None
+        cls, spawn_params: AgentSpawnParams, sim_core: AgentHost | None = None
     ) -> Agent:
         """Create a URDF, mesh or virtual agent from ``spawn_params``.
 
@@ -173,7 +175,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
 
     @classmethod
     def _finish_spawn(
-        cls, agent: Agent, spawn_params: AgentSpawnParams, sim_core: MultiRobotSimulationCore | None
+        cls, agent: Agent, spawn_params: AgentSpawnParams, sim_core: AgentHost | None
     ) -> Agent:
         agent.pickable = spawn_params.pickable
         try:
@@ -189,7 +191,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
 
     @classmethod
     def spawn_batch(  # type: ignore[override]  # takes AgentSpawnParams, as the seed
-        cls, params_list: Sequence[AgentSpawnParams], sim_core: MultiRobotSimulationCore
+        cls, params_list: Sequence[AgentSpawnParams], sim_core: AgentHost
     ) -> list[Agent]:
         """Spawn many agents fast: shape-based bodies are left pending or created in batches
         (as ``from_params`` would).
@@ -226,7 +228,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         motion_mode: MotionMode | str = MotionMode.DIFFERENTIAL,
         use_fixed_base: bool = False,
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: AgentHost | None = None,
         name: str | None = None,
         user_data: dict[str, Any] | None = None,
         controller: Any = None,
@@ -256,7 +258,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         motion_mode: MotionMode | str = MotionMode.DIFFERENTIAL,
         use_fixed_base: bool = False,
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: AgentHost | None = None,
         name: str | None = None,
         user_data: dict[str, Any] | None = None,
         ik_params: IKParams | None = None,

@@ -25,7 +25,7 @@ from fleet_async.core.world.links import link_index
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.agents.host import AgentHost
 
 __all__ = ["AgentJointsApi"]
 
@@ -43,7 +43,7 @@ class AgentJointsApi:
     # Provided by Agent / SimObject.
     body_id: int
     urdf_path: str | None
-    sim_core: MultiRobotSimulationCore | None
+    sim_core: AgentHost | None
     _ik_params: IKParams | None
     _joint_tolerance: ToleranceSpec
     _joint_set: JointSet | None
@@ -367,7 +367,7 @@ class AgentJointsApi:
         sim = self._sim_for("update_attached_objects_kinematics")
         sim.attachments.follow_parent(self._agent)
 
-    def _sim_for(self, what: str) -> MultiRobotSimulationCore:
+    def _sim_for(self, what: str) -> AgentHost:
         sim = self.sim_core
         if sim is None:
             raise ValueError(f"{what}: {self!r} is not part of a simulation")

@@ -30,9 +30,9 @@ from fleet_async.core.motion.controllers import (
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.agents.host import AgentHost
     from fleet_async.core.motion.joints import JointSet
     from fleet_async.core.motion.kinematics import KinematicEngine
-    from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.core.world.state import KinematicState
 
 __all__ = ["AgentMotionApi"]
@@ -57,7 +57,7 @@ class AgentMotionApi:
     """The controller chain and base motion of an agent (mixed into Agent)."""
 
     # Provided by Agent / SimObject.
-    sim_core: MultiRobotSimulationCore | None
+    sim_core: AgentHost | None
     check_not_removed: Callable[[str], None]  # SimObject's: raises once the agent left its sim
     use_fixed_base: bool
     motion_result: bool | None

@@ -23,7 +23,7 @@ from fleet_async.core.motion.segments import MotionLimits
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.agents.host import FleetHost
 
 __all__ = ["FleetMotion"]
 
@@ -31,7 +31,7 @@ __all__ = ["FleetMotion"]
 class FleetMotion:
     """Drives every agent of one simulation."""
 
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, sim: FleetHost) -> None:
         self._sim = sim
         self.engine = KinematicEngine(sim.state, self._on_motion_end)
         self.actions = ActionQueue(sim)

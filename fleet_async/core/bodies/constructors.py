@@ -24,8 +24,8 @@ from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.world.shapes import ShapeParams, get_or_create_shapes
 
 if TYPE_CHECKING:
+    from fleet_async.core.bodies.host import BodyHost
     from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = ["SimObjectConstructors"]
 
@@ -47,7 +47,7 @@ class SimObjectConstructors:
 
     @classmethod
     def from_params(
-        cls, spawn_params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None = None
+        cls, spawn_params: SimObjectSpawnParams, sim_core: BodyHost | None = None
     ) -> SimObject:
         """Create the body described by ``spawn_params`` and wrap it.
 
@@ -73,7 +73,7 @@ class SimObjectConstructors:
 
     @classmethod
     def spawn_batch(
-        cls, params_list: Sequence[SimObjectSpawnParams], sim_core: MultiRobotSimulationCore
+        cls, params_list: Sequence[SimObjectSpawnParams], sim_core: BodyHost
     ) -> list[SimObject]:
         """Spawn many shape-based objects fast (bodies pending or created in batches, as
         ``from_params`` would); input order kept.
@@ -112,7 +112,7 @@ class SimObjectConstructors:
         pose: Pose | None = None,
         mass: float = 0.0,
         pickable: bool = True,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: BodyHost | None = None,
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
         name: str | None = None,
         user_data: dict[str, Any] | None = None,
@@ -131,9 +131,7 @@ class SimObjectConstructors:
         return cls.from_params(params, sim_core)
 
     @classmethod
-    def from_dict(
-        cls, config: dict[str, Any], sim_core: MultiRobotSimulationCore | None = None
-    ) -> SimObject:
+    def from_dict(cls, config: dict[str, Any], sim_core: BodyHost | None = None) -> SimObject:
         """``from_params(_spawn_params_cls.from_dict(config))`` in one call."""
         return cls.from_params(cls._spawn_params_cls.from_dict(config), sim_core)
 
@@ -141,7 +139,7 @@ class SimObjectConstructors:
     def from_sdf(
         cls,
         sdf_path: str,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: BodyHost | None = None,
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
         global_scaling: float = 1.0,
         name_prefix: str | None = None,

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 from fleet_async.core.base.scheduling import PeriodicSchedule
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.bodies.host import BodyHost
 
 __all__ = ["ObjectCallbacks"]
 
@@ -21,7 +21,7 @@ class ObjectCallbacks:
     """Callbacks of one object (mixed into SimObject, which creates ``_callbacks``)."""
 
     _callbacks: PeriodicSchedule
-    sim_core: MultiRobotSimulationCore | None
+    sim_core: BodyHost | None
 
     def register_callback(
         self, callback: Callable[[Any, float], Any], frequency: float = 0.25

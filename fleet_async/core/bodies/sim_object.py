@@ -34,7 +34,7 @@ from fleet_async.core.world.shapes import ShapeParams
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.bodies.host import BodyHost
 
 __all__ = ["ObjectRemovedError", "ShapeParams", "SimObject", "SimObjectSpawnParams"]
 
@@ -71,7 +71,7 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
     def __init__(
         self,
         body_id: int,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: BodyHost | None = None,
         pickable: bool = True,
         mass: float | None = None,
         collision_mode: CollisionMode | str = CollisionMode.NORMAL_3D,
@@ -85,7 +85,7 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         self.name = name
         self.pickable = bool(pickable)
         self.user_data: dict[str, Any] = {} if user_data is None else user_data
-        self.sim_core: MultiRobotSimulationCore | None = None
+        self.sim_core: BodyHost | None = None
         self._collision_mode = coerce_enum(CollisionMode, collision_mode, "collision_mode")
         self._events: EventBus | None = None
         self._callbacks = PeriodicSchedule()
@@ -136,11 +136,9 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         """Take the PyBullet body created for this object. Called by the world; not for users."""
         self._body_id = int(body_id)
 
-    # ----- binding to a simulation (called by MultiRobotSimulationCore) -------------------
+    # ----- binding to a simulation (called by BodyHost) -------------------
 
-    def bind(
-        self, sim: MultiRobotSimulationCore, store: KinematicState, row: int, object_id: int
-    ) -> None:
+    def bind(self, sim: BodyHost, store: KinematicState, row: int, object_id: int) -> None:
         """Adopt a row in ``sim``'s store. Called by ``sim.add_object``; not for users."""
         self.sim_core = sim
         self._store = store
@@ -397,7 +395,7 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         every step; objects that do not cost nothing)."""
         return type(self).update is not SimObject.update
 
-    def _require_sim(self, what: str) -> MultiRobotSimulationCore:
+    def _require_sim(self, what: str) -> BodyHost:
         self.check_not_removed(what)
         if self.sim_core is None:
             raise ValueError(f"{what}: {self!r} is not part of a simulation")

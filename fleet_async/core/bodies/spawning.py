@@ -29,8 +29,8 @@ from fleet_async.core.world.shapes import get_or_create_shapes, record_body_shap
 
 if TYPE_CHECKING:
     from fleet_async.core.base.types import CollisionMode
+    from fleet_async.core.bodies.host import BodyHost
     from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.simulation import MultiRobotSimulationCore
 
 __all__ = [
     "Deferred",
@@ -51,7 +51,7 @@ _CHUNK = 4096
 _IDENTITY = [0.0, 0.0, 0.0, 1.0]
 
 
-def _shape_ids(params: SimObjectSpawnParams, sim: MultiRobotSimulationCore) -> tuple[int, int]:
+def _shape_ids(params: SimObjectSpawnParams, sim: BodyHost) -> tuple[int, int]:
     visual, collision = params.visual_shape, params.collision_shape
     if visual is not None and params.visual_frame_pose is not None:
         visual = dataclasses.replace(visual, frame_pose=params.visual_frame_pose)
@@ -62,7 +62,7 @@ def _shape_ids(params: SimObjectSpawnParams, sim: MultiRobotSimulationCore) -> t
 
 
 def reserve_body(
-    params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None
+    params: SimObjectSpawnParams, sim_core: BodyHost | None
 ) -> tuple[int, Deferred | None]:
     """A body for ``params``: ``(body_id, None)`` when made now, ``(PENDING_BODY, deferred)``
     when the world will make it with others.
@@ -88,7 +88,7 @@ def construct(
     make: Callable[[int], T],
     body: int,
     deferred: Deferred | None,
-    sim_core: MultiRobotSimulationCore | None,
+    sim_core: BodyHost | None,
 ) -> T:
     """``make(body)`` for a body from :func:`reserve_body`; a body made for it is removed if
     that fails."""
@@ -108,7 +108,7 @@ def construct(
 
 
 def reserve_bodies(
-    params_list: Sequence[SimObjectSpawnParams], sim: MultiRobotSimulationCore
+    params_list: Sequence[SimObjectSpawnParams], sim: BodyHost
 ) -> list[tuple[int, Deferred | None]]:
     """:func:`reserve_body` for many: bodies that can wait are left pending, the others are
     created now in batches (:func:`create_bodies`). Input order kept.
@@ -128,9 +128,7 @@ def reserve_bodies(
     return out
 
 
-def create_bodies(
-    params_list: Sequence[SimObjectSpawnParams], sim: MultiRobotSimulationCore
-) -> list[int]:
+def create_bodies(params_list: Sequence[SimObjectSpawnParams], sim: BodyHost) -> list[int]:
     """Create one PyBullet body per entry (shape-based params only); return ids in input order.
 
     Raises:
@@ -177,7 +175,7 @@ def create_bodies(
 def wrap_all(
     bodies: Sequence[int],
     make: Callable[[int, int], T],
-    sim: MultiRobotSimulationCore,
+    sim: BodyHost,
 ) -> list[T]:
     """Wrap each body with ``make(index, body)``; on failure remove what was built, re-raise."""
     made: list[T] = []
@@ -194,7 +192,7 @@ def wrap_all(
     return made
 
 
-def create_body(params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore | None) -> int:
+def create_body(params: SimObjectSpawnParams, sim_core: BodyHost | None) -> int:
     """Create the PyBullet multibody for ``params`` and return its body id."""
     client = 0 if sim_core is None else sim_core.client
     if sim_core is None and not p.isConnected(physicsClientId=0):
@@ -227,7 +225,7 @@ def create_body(params: SimObjectSpawnParams, sim_core: MultiRobotSimulationCore
 def load_sdf_objects(
     cls: type[T],
     sdf_path: str,
-    sim_core: MultiRobotSimulationCore | None,
+    sim_core: BodyHost | None,
     collision_mode: CollisionMode | str,
     global_scaling: float,
     name_prefix: str | None,

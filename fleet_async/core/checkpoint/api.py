@@ -19,8 +19,7 @@ if TYPE_CHECKING:
     from fleet_async.core.base.scheduling import PeriodicSchedule
     from fleet_async.core.collision.system import CollisionSystem
     from fleet_async.core.motion.joints import JointMotion
-    from fleet_async.core.sim.kernel import MotionSystem
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import MotionSystem, SimulationKernel
 
 __all__ = ["CheckpointApi"]
 
@@ -51,7 +50,7 @@ class CheckpointApi:
             CheckpointError: naming what cannot be saved (also while ``fleet_async.run`` is in
                 progress: a mission waiting mid-await cannot be saved).
         """
-        save(cast("MultiRobotSimulationCore", self), path, self._checkpoint_parts())
+        save(cast("SimulationKernel", self), path, self._checkpoint_parts())
 
     def restore_state(self, path: str | os.PathLike[str]) -> None:
         """Bring this simulation, freshly built from the scenario a checkpoint was saved from
@@ -61,7 +60,7 @@ class CheckpointApi:
             CheckpointError: for a simulation built differently or already stepped, naming
                 the difference; for a file that is no checkpoint.
         """
-        sim = cast("MultiRobotSimulationCore", self)
+        sim = cast("SimulationKernel", self)
         clock = restore(sim, path, self._checkpoint_parts())
         self._step_count, self._collision_count, self._paused = clock
         self._initialized = True  # step_once must not zero the restored clock

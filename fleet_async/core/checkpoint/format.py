@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from fleet_async.core.collision.system import CollisionSystem
     from fleet_async.core.motion.joints import JointMotion
     from fleet_async.core.motion.kinematics import KinematicEngine
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = [
     "FORMAT",
@@ -65,7 +65,7 @@ class CheckpointParts:
 class StatePickler(pickle.Pickler):
     """Saves the simulation and its objects by reference (``("object", id)``)."""
 
-    def __init__(self, file: IO[bytes], sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, file: IO[bytes], sim: SimulationKernel) -> None:
         super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
         self._sim = sim
 
@@ -87,7 +87,7 @@ class StatePickler(pickle.Pickler):
 class StateUnpickler(pickle.Unpickler):
     """Reads what :class:`StatePickler` wrote, resolving references against ``sim``."""
 
-    def __init__(self, file: IO[bytes], sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, file: IO[bytes], sim: SimulationKernel) -> None:
         super().__init__(file)
         self._sim = sim
 

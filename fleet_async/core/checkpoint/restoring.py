@@ -28,14 +28,12 @@ from fleet_async.core.checkpoint.format import (
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["restore"]
 
 
-def _load(
-    sim: MultiRobotSimulationCore, path: str | os.PathLike[str], step_count: int
-) -> dict[str, Any]:
+def _load(sim: SimulationKernel, path: str | os.PathLike[str], step_count: int) -> dict[str, Any]:
     """The checkpoint's state, once its header shows that ``sim`` can take it."""
     unpickler = StateUnpickler(io.BytesIO(Path(path).read_bytes()), sim)
     try:
@@ -61,7 +59,7 @@ def _load(
     return state
 
 
-def _check_target(sim: MultiRobotSimulationCore, header: dict[str, Any], step_count: int) -> None:
+def _check_target(sim: SimulationKernel, header: dict[str, Any], step_count: int) -> None:
     where = "restore_state"
     if sim.params.physics:
         raise CheckpointError(f"{where}: physics=True: checkpoints cover kinematic simulations")
@@ -104,7 +102,7 @@ def _restore_typed(owner: str, items: list[Any], saved: list[tuple[str, dict[str
         item.set_state(item_state)
 
 
-def _restore_objects(sim: MultiRobotSimulationCore, state: dict[str, Any]) -> None:
+def _restore_objects(sim: SimulationKernel, state: dict[str, Any]) -> None:
     objects = sim.sim_objects
     for obj in objects:  # the scenario's own attachments make way for the saved ones
         held = sim.attachments.of_child(obj)
@@ -128,9 +126,7 @@ def _restore_objects(sim: MultiRobotSimulationCore, state: dict[str, Any]) -> No
     sim.sync_pybullet()
 
 
-def _restore_agents(
-    sim: MultiRobotSimulationCore, state: dict[str, Any], parts: CheckpointParts
-) -> None:
+def _restore_agents(sim: SimulationKernel, state: dict[str, Any], parts: CheckpointParts) -> None:
     def agent_of(object_id: int) -> Agent:
         return cast("Agent", sim.get_object_by_id(object_id))
 
@@ -152,7 +148,7 @@ def _restore_agents(
 
 
 def restore(
-    sim: MultiRobotSimulationCore, path: str | os.PathLike[str], parts: CheckpointParts
+    sim: SimulationKernel, path: str | os.PathLike[str], parts: CheckpointParts
 ) -> tuple[int, int, bool]:
     """Bring ``sim`` (freshly built from the same scenario) to the state saved in ``path``.
 

@@ -29,12 +29,12 @@ from fleet_async.core.checkpoint.format import (
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["save"]
 
 
-def _refuse_unsaveable(sim: MultiRobotSimulationCore, parts: CheckpointParts) -> None:
+def _refuse_unsaveable(sim: SimulationKernel, parts: CheckpointParts) -> None:
     if sim.params.physics:
         raise CheckpointError(
             "save_state: physics=True: PyBullet's dynamic state is not captured; checkpoints "
@@ -68,7 +68,7 @@ def _agent_state(agent: Agent) -> dict[str, Any]:
     }
 
 
-def _header(sim: MultiRobotSimulationCore) -> dict[str, Any]:
+def _header(sim: SimulationKernel) -> dict[str, Any]:
     """What a restore checks before it reads anything that refers to objects."""
     return {
         "format": FORMAT,
@@ -78,7 +78,7 @@ def _header(sim: MultiRobotSimulationCore) -> dict[str, Any]:
     }
 
 
-def _collect(sim: MultiRobotSimulationCore, parts: CheckpointParts) -> dict[str, Any]:
+def _collect(sim: SimulationKernel, parts: CheckpointParts) -> dict[str, Any]:
     store = sim.state
     objects = sim.sim_objects
     rows = np.array([obj.state_row for obj in objects], dtype=np.int64)
@@ -105,9 +105,7 @@ def _collect(sim: MultiRobotSimulationCore, parts: CheckpointParts) -> dict[str,
     }
 
 
-def save(
-    sim: MultiRobotSimulationCore, path: str | os.PathLike[str], parts: CheckpointParts
-) -> None:
+def save(sim: SimulationKernel, path: str | os.PathLike[str], parts: CheckpointParts) -> None:
     """Write ``sim``'s state to ``path`` (see ``fleet_async.core.checkpoint`` for what is and is not
     saved).
 

@@ -11,7 +11,7 @@ through :meth:`Device.from_params`. Its body moves only through the device motio
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 import pybullet as p
 
@@ -21,7 +21,7 @@ from fleet_async.core.bodies.spawning import create_body
 from fleet_async.core.devices.motion import DeviceMotion
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["Device"]
 
@@ -37,10 +37,13 @@ class Device(Agent):
     device_type: ClassVar[str] = "device"
     """The scenario ``type:`` name of this device class."""
     is_robot: ClassVar[bool] = False  # the fleet's KPIs leave devices out
+    sim_core: SimulationKernel | None
+    """The simulation the device is in: devices stand above the kernel and use more of it
+    than an agent does (the step count, poses in bulk, the mission waits, motion systems)."""
 
     @classmethod
     def from_params(  # type: ignore[override]  # takes the device's own params
-        cls, spawn_params: AgentSpawnParams, sim_core: MultiRobotSimulationCore | None = None
+        cls, spawn_params: AgentSpawnParams, sim_core: SimulationKernel | None = None
     ) -> Device:
         """Create the device described by ``spawn_params`` (an instance of
         ``cls._spawn_params_cls``).
@@ -86,7 +89,7 @@ class Device(Agent):
 
     @classmethod
     def spawn_batch(  # type: ignore[override]  # devices spawn one by one
-        cls, params_list: Sequence[AgentSpawnParams], sim_core: MultiRobotSimulationCore
+        cls, params_list: Sequence[AgentSpawnParams], sim_core: SimulationKernel
     ) -> list[Device]:
         """Spawn devices one by one (in order); if one fails, the others are removed."""
         made: list[Device] = []
@@ -134,6 +137,10 @@ class Device(Agent):
         """The device motion system brought the device to the end of its motion."""
 
     # ----- helpers for subclasses ---------------------------------------------------------
+
+    def _require_sim(self, what: str) -> SimulationKernel:
+        # The same check as SimObject's; a device's simulation is a kernel (see ``sim_core``).
+        return cast("SimulationKernel", super()._require_sim(what))
 
     @property
     def device_motion(self) -> DeviceMotion:

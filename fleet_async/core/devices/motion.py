@@ -24,7 +24,7 @@ from fleet_async.core.base.steps import steps_for
 if TYPE_CHECKING:
     from fleet_async.core.actions.host import ActingAgent
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["DeviceAction", "DeviceMotion", "MovingDevice"]
 
@@ -58,11 +58,11 @@ class _Move:
 class DeviceMotion:
     """Advances every moving device of one simulation (one per simulation: :meth:`of`)."""
 
-    sim: MultiRobotSimulationCore
+    sim: SimulationKernel
     _moves: dict[int, _Move] = field(default_factory=dict)
 
     @classmethod
-    def of(cls, sim: MultiRobotSimulationCore) -> DeviceMotion:
+    def of(cls, sim: SimulationKernel) -> DeviceMotion:
         """The simulation's device motion system, registered with it on first use."""
         motion = _SYSTEMS.get(sim)
         if motion is None:
@@ -110,9 +110,7 @@ class DeviceMotion:
                 self.sim.fleet.wake_action(agent)
 
 
-_SYSTEMS: weakref.WeakKeyDictionary[MultiRobotSimulationCore, DeviceMotion] = (
-    weakref.WeakKeyDictionary()
-)
+_SYSTEMS: weakref.WeakKeyDictionary[SimulationKernel, DeviceMotion] = weakref.WeakKeyDictionary()
 
 
 @dataclass(eq=False)
@@ -158,8 +156,8 @@ class DeviceAction(Action):
         self._started = False
 
     @staticmethod
-    def _sim_of(agent: Agent) -> MultiRobotSimulationCore:
+    def _sim_of(agent: Agent) -> SimulationKernel:
         sim = agent.sim_core
         if sim is None:
             raise ValueError(f"{agent!r} is not part of a simulation")
-        return sim
+        return cast("SimulationKernel", sim)  # a device's simulation: see Device.sim_core

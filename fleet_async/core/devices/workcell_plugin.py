@@ -33,7 +33,7 @@ from fleet_async.core.sim.plugins import SimPlugin
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["WorkcellPlugin"]
 
@@ -47,9 +47,7 @@ class WorkcellPlugin(SimPlugin):
         ValueError: for an unknown config key (naming it and the valid ones) or a bad station.
     """
 
-    def __init__(
-        self, sim_core: MultiRobotSimulationCore, config: dict[str, Any] | None = None
-    ) -> None:
+    def __init__(self, sim_core: SimulationKernel, config: dict[str, Any] | None = None) -> None:
         super().__init__(sim_core, config)
         config = dict(self.config)
         stations = config.pop("workcells", {})

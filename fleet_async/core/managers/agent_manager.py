@@ -7,7 +7,7 @@ import dataclasses
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from fleet_async.core.agents.agent import Agent
 from fleet_async.core.agents.agent_params import AgentSpawnParams
@@ -28,7 +28,7 @@ from fleet_async.core.motion.controllers import (
 
 if TYPE_CHECKING:
     from fleet_async.core.actions.action import Action
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.managers.host import CameraHost, ManagerHost
 
 __all__ = ["AgentManager"]
 
@@ -132,7 +132,7 @@ class AgentManager(SimObjectManager[Agent]):
 
     def __init__(
         self,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: ManagerHost | None = None,
         name: str | None = None,
         update_frequency: float = 10.0,
         object_class: type[Agent] = Agent,
@@ -155,7 +155,7 @@ class AgentManager(SimObjectManager[Agent]):
     def __repr__(self) -> str:
         return f"AgentManager(name={self.name!r}, objects={len(self.objects)})"
 
-    def _attach(self, sim: MultiRobotSimulationCore) -> None:
+    def _attach(self, sim: ManagerHost) -> None:
         other = None if self.name is None else sim.get_manager(self.name)
         if other is not None and other is not self:
             raise ValueError(
@@ -345,7 +345,9 @@ class AgentManager(SimObjectManager[Agent]):
         positions = (
             self.sim_core.get_poses(self.object_ids)[0].tolist() if self.object_ids else None
         )
-        return self.sim_core.setup_camera(camera_config, entity_positions=positions)
+        # A manager's simulation is the whole one, whose view floor adds the GUI camera.
+        camera = cast("CameraHost", self.sim_core)
+        return camera.setup_camera(camera_config, entity_positions=positions)
 
     # ----- batch mode ---------------------------------------------------------------------
 

@@ -37,7 +37,7 @@ from fleet_async.core.managers.grid_spawn import (
 )
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.managers.host import ManagerHost
 
 __all__ = [
     "ENTITY_REGISTRY",
@@ -111,7 +111,7 @@ class SimObjectManager(Generic[T]):
 
     def __init__(
         self,
-        sim_core: MultiRobotSimulationCore | None = None,
+        sim_core: ManagerHost | None = None,
         object_class: type[SimObject] = SimObject,
         enable_profiling: bool = False,
         *,
@@ -134,14 +134,14 @@ class SimObjectManager(Generic[T]):
         self.body_ids: list[int] = []
         self.object_ids: list[int] = []
         self._by_object_id: dict[int, T] = {}
-        self.sim_core: MultiRobotSimulationCore | None = None
+        self.sim_core: ManagerHost | None = None
         if sim_core is not None:
             self._attach(sim_core)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(objects={len(self.objects)})"
 
-    def _attach(self, sim: MultiRobotSimulationCore) -> None:
+    def _attach(self, sim: ManagerHost) -> None:
         """Join ``sim`` so its removals and resets reach this manager."""
         other = None if self.name is None else sim.get_manager(self.name)
         if other is not None and other is not self:
@@ -174,7 +174,7 @@ class SimObjectManager(Generic[T]):
         if self._by_object_id.get(obj.object_id) is obj:
             return
         if self.sim_core is None:
-            self._attach(obj.sim_core)
+            self._attach(cast("ManagerHost", obj.sim_core))  # an object's is the whole sim
         elif obj.sim_core is not self.sim_core:
             raise ValueError(f"add_object: {obj!r} belongs to another simulation")
         self.objects.append(obj)

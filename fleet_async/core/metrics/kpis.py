@@ -34,7 +34,7 @@ if sys.version_info < (3, 11):  # anyio depends on the backport there
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["OBSERVE_FIRST", "OBSERVE_LAST", "KpiApi", "KpiCollector"]
 
@@ -124,7 +124,7 @@ class KpiCollector:
         sim: The simulation to observe.
     """
 
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, sim: SimulationKernel) -> None:
         self._sim = sim
         self._dt = sim.params.timestep
         self._steps = 0
@@ -422,5 +422,5 @@ class KpiApi:
         """The fleet KPI collector (``.summary()``, ``.per_robot()``); it subscribes on the
         first call and counts from then on, so call it before running."""
         if self._kpis is None:
-            self._kpis = KpiCollector(cast("MultiRobotSimulationCore", self))
+            self._kpis = KpiCollector(cast("SimulationKernel", self))
         return self._kpis

@@ -22,7 +22,7 @@ from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.missions.errors import ExternallyDrivenError, NoMissionRuntimeError
 
 if TYPE_CHECKING:
-    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.missions.host import MissionAgent
     from fleet_async.core.missions.mission_api import MissionRuntime
 
 __all__ = ["AgentMissionApi"]
@@ -41,7 +41,7 @@ class AgentMissionApi:
     """
 
     def _mission_runtime(self, what: str) -> MissionRuntime:
-        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        agent: MissionAgent = self  # type: ignore[assignment]  # mixed into Agent, a MissionAgent
         agent.check_not_removed(what)  # "needs a running mission" would mislead
         if self.external_driver is not None:
             raise ExternallyDrivenError(
@@ -60,7 +60,7 @@ class AgentMissionApi:
         """Queue ``action`` now and return its event: ``await`` it to wait for the end,
         ``cancel()`` it, or watch ``status``, ``phase`` and ``progress``."""
         runtime = self._mission_runtime("agent.submit")
-        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        agent: MissionAgent = self  # type: ignore[assignment]  # mixed into Agent, a MissionAgent
         action.awaited = True  # e.g. a move on a fixed base fails rather than being skipped
         agent.add_action(action)
         return runtime.wait_action(agent, action)
@@ -94,7 +94,7 @@ class AgentMissionApi:
             ValueError: if the agent has no battery (charging would only wait), saying how to
                 give it one.
         """
-        agent: Agent = self  # type: ignore[assignment]  # this mixin is only used by Agent
+        agent: MissionAgent = self  # type: ignore[assignment]  # mixed into Agent, a MissionAgent
         if agent.battery_plugin is None:
             raise ValueError(
                 f"agent.charge: {agent!r} has no battery, so charging would only wait. Give it "

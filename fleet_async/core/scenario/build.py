@@ -56,7 +56,11 @@ from fleet_async.core.scenario.missions import MissionSpec, parse_missions
 from fleet_async.core.sim.plugins import SimPlugin
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from collections.abc import Callable
+
+    from typing_extensions import Self
+
+    from fleet_async.core.scenario.host import BuiltSim
 
 __all__ = [
     "ACTION_TYPES",
@@ -127,7 +131,7 @@ class ScenarioApi:
         *,
         source: str | None = None,
         base_dir: str | os.PathLike[str] | None = None,
-    ) -> MultiRobotSimulationCore:
+    ) -> Self:
         """Create a simulation from a scenario mapping (flat or nested layout, see module doc).
 
         Args:
@@ -143,13 +147,12 @@ class ScenarioApi:
                 ``source``) or a bad value (naming the expected type).
             FileNotFoundError: for a missing URDF, mesh or world file, naming the paths tried.
         """
-        factory = cast("type[MultiRobotSimulationCore]", cls)
-        return _build(factory, config, source, base_dir)
+        # Mixed into MultiRobotSimulationCore, a BuiltSim: the class called on is built.
+        factory = cast("Callable[[SimulationParams], BuiltSim]", cls)
+        return cast("Self", _build(factory, config, source, base_dir))
 
     @classmethod
-    def from_yaml(
-        cls, yaml_path: str | os.PathLike[str] = "config.yaml"
-    ) -> MultiRobotSimulationCore:
+    def from_yaml(cls, yaml_path: str | os.PathLike[str] = "config.yaml") -> Self:
         """Create a simulation from a YAML scenario file (see :meth:`from_dict`).
 
         Relative files in the scenario are looked up next to ``yaml_path`` first.
@@ -196,7 +199,7 @@ class ScenarioApi:
             ValueError, FileNotFoundError: for a bad entry, naming ``entities[i]`` and
                 ``source``. Nothing this call spawned or registered is left behind.
         """
-        sim = cast("MultiRobotSimulationCore", self)
+        sim = cast("BuiltSim", self)  # mixed into MultiRobotSimulationCore
         return spawn_entities(sim, robots_config, where_prefix(source), base_dir, declared=None)
 
 
@@ -212,11 +215,11 @@ def _section(config: Mapping[str, Any], name: str, kind: type, where: str) -> An
 
 
 def _build(
-    factory: type[MultiRobotSimulationCore],
+    factory: Callable[[SimulationParams], BuiltSim],
     config: Mapping[str, Any],
     source: str | None,
     base_dir: str | os.PathLike[str] | None,
-) -> MultiRobotSimulationCore:
+) -> BuiltSim:
     where = where_prefix(source)
     expect_type(config, Mapping, "a mapping at the top level", where, "scenario")
     if not any(key in SCENARIO_SECTIONS for key in config):
@@ -267,7 +270,7 @@ TRACE_KEYS = ("path", "every_n_steps", "fps")
 """Keys of the ``trace:`` section (``sim.start_trace``'s arguments)."""
 
 
-def _start_trace(sim: MultiRobotSimulationCore, entry: Any, where: str) -> None:
+def _start_trace(sim: BuiltSim, entry: Any, where: str) -> None:
     """The ``trace:`` section: a path, or ``{path, every_n_steps | fps}``."""
     options = {"path": entry} if isinstance(entry, str) else entry
     expect_type(options, dict, "a path or a mapping {path, every_n_steps | fps}", where, "trace")
@@ -303,7 +306,7 @@ def _check_sections(config: Mapping[str, Any], where: str) -> None:
 # ----- managers and plugins ---------------------------------------------------------------------
 
 
-def _create_managers(sim: MultiRobotSimulationCore, entries: list[Any], where: str) -> list[str]:
+def _create_managers(sim: BuiltSim, entries: list[Any], where: str) -> list[str]:
     """Create, name and register each declared manager; return their names."""
     names: list[str] = []
     for i, entry in enumerate(entries):

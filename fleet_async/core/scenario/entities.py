@@ -45,7 +45,7 @@ from fleet_async.core.scenario.errors import (
 from fleet_async.core.world.shapes import ShapeParams
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.scenario.host import EntityHost
 
 __all__ = ["ACTION_TYPES", "SCENARIO_ENTITY_KEYS", "spawn_entities"]
 
@@ -89,7 +89,7 @@ class _EntityPlan:
 
 
 def spawn_entities(
-    sim: MultiRobotSimulationCore,
+    sim: EntityHost,
     entries: Any,
     where: str,
     base_dir: str | os.PathLike[str] | None,
@@ -118,7 +118,7 @@ def spawn_entities(
 
 
 def _plan_entity(
-    sim: MultiRobotSimulationCore,
+    sim: EntityHost,
     entry: Any,
     label: str,
     where: str,
@@ -180,7 +180,7 @@ def _plan_grid(
 
 
 def _plan_manager(
-    sim: MultiRobotSimulationCore,
+    sim: EntityHost,
     scenario: dict[str, Any],
     cls: type[SimObject],
     where: str,
@@ -214,7 +214,7 @@ def _plan_manager(
 
 
 def _spawn_plan(
-    sim: MultiRobotSimulationCore,
+    sim: EntityHost,
     plan: _EntityPlan,
     fresh: list[SimObjectManager[Any]],
     where: str,
@@ -238,7 +238,7 @@ def _spawn_plan(
 
 
 def _spawn_objects(
-    sim: MultiRobotSimulationCore,
+    sim: EntityHost,
     plan: _EntityPlan,
     manager: SimObjectManager[Any] | None,
     where: str,
@@ -279,7 +279,7 @@ def _spawn_objects(
 
 def _resolve_files(
     config: dict[str, Any],
-    sim: MultiRobotSimulationCore,
+    sim: EntityHost,
     base_dir: str | os.PathLike[str] | None,
     where: str,
     label: str,

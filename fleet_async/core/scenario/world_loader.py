@@ -58,7 +58,7 @@ from fleet_async.core.world.link_colours import one_colour_per_link
 from fleet_async.core.world.shapes import forget_body_shape, record_body_shape
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["WorldLoadError", "WorldLoadFailure", "WorldLoadingApi"]
 
@@ -354,7 +354,7 @@ class WorldLoadingApi:
             FileNotFoundError: if the source or a ``model_paths`` directory does not exist.
             ValueError / TypeError: for a bad ``world_config`` (unknown key, no source...).
         """
-        sim = cast("MultiRobotSimulationCore", self)
+        sim = cast("SimulationKernel", self)
         opts = read_world_config(world_config, skip_models, base_dir)
         loader = _load_bodies(sim, opts)
         if loader.failures and opts.on_error == "raise":
@@ -376,7 +376,7 @@ class WorldLoadingApi:
         return objects
 
 
-def _load_bodies(sim: MultiRobotSimulationCore, opts: WorldOptions) -> BodyLoader:
+def _load_bodies(sim: SimulationKernel, opts: WorldOptions) -> BodyLoader:
     """Create the bodies of ``opts.source`` in PyBullet (not yet SimObjects)."""
     search = ModelSearch(model_search_dirs(opts.model_paths, opts.source, opts.key))
     # Rewritten SDF copies and converted meshes are only read during loadSDF / shape creation.
@@ -391,7 +391,7 @@ def _load_bodies(sim: MultiRobotSimulationCore, opts: WorldOptions) -> BodyLoade
     return loader
 
 
-def _wrap(sim: MultiRobotSimulationCore, loader: BodyLoader) -> list[SimObject]:
+def _wrap(sim: SimulationKernel, loader: BodyLoader) -> list[SimObject]:
     """Register every loaded body as a STATIC SimObject; on error, leave nothing behind."""
     objects: list[SimObject] = []
     try:

@@ -26,7 +26,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import numpy as np
 
@@ -49,8 +49,10 @@ from fleet_async.core.world.state import KinematicState
 from fleet_async.core.world.world import World
 
 if TYPE_CHECKING:
+    from typing_extensions import Self
+
     from fleet_async.core.agents.agent import Agent
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.bodies.sim_object import SimObject
 
 __all__ = ["MotionSystem", "SimulationKernel"]
 
@@ -72,7 +74,8 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
     """The clock, the step loop and what it moves (objects, agents, plugins, managers).
 
     Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
-    adds the layers above; collaborators are handed the simulation as that class.
+    adds the layers above; collaborators are handed the kernel, each naming what it uses of it
+    with a protocol of its own floor.
 
     Args:
         params: Simulation settings (default ``SimulationParams()``).
@@ -96,10 +99,12 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         self.rng = np.random.default_rng(self._params.seed)
         self._backend = PyBulletBackend(self._params)
         self._backend.connect()
-        # Collaborators are handed the simulation as the class it is always built as.
-        sim = cast("MultiRobotSimulationCore", self)
-        self._world = World(sim, self._backend, self.events, self._params.physics)
-        self._fleet = FleetMotion(sim)
+        # Collaborators are handed the kernel and name what they use of it with a protocol of
+        # their own floor (``world/host.py``, ``agents/host.py``, ``collision/host.py``, ...).
+        self._world: World[SimObject] = World(
+            self, self._backend, self.events, self._params.physics
+        )
+        self._fleet = FleetMotion(self)
         self._collision = CollisionSystem(self, self._push_dirty)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
@@ -173,12 +178,12 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         return self._joint_motion
 
     @property
-    def world(self) -> World:
+    def world(self) -> World[SimObject]:
         """Objects, rows and attachments (what SimObject handles call back into)."""
         return self._world
 
     @property
-    def attachments(self) -> AttachmentSet:
+    def attachments(self) -> AttachmentSet[SimObject]:
         """Every parent/child attachment."""
         return self._world.attachments
 
@@ -216,7 +221,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
 
     def register_callback(
         self,
-        callback: Callable[[MultiRobotSimulationCore, float], Any],
+        callback: Callable[[Self, float], Any],
         frequency: float | None = None,
     ) -> None:
         """Call ``callback(sim, dt)`` every step (None) or at ``frequency`` Hz of sim time."""
@@ -238,7 +243,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
             TypeError: if the argument is not a SimPlugin or SimPlugin subclass.
             ValueError: if ``config`` is given with an instance.
         """
-        plugin = as_plugin(plugin_or_cls, cast("MultiRobotSimulationCore", self), config)
+        plugin = as_plugin(plugin_or_cls, self, config)
         freq = frequency if frequency is not None else plugin.frequency
         self._plugin_schedule.add(
             plugin.on_step,

@@ -23,7 +23,7 @@ class ObjectsApi:
     """Objects of a simulation (mixed into the simulation kernel)."""
 
     # Provided by the simulation kernel.
-    _world: World
+    _world: World[SimObject]
     _backend: PyBulletBackend
     _managers: list[Any]
 

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 from fleet_async.core.base.attr_state import AttributeState
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["SimPlugin", "as_plugin"]
 
@@ -30,9 +30,7 @@ class SimPlugin(AttributeState):
 
     frequency: float | None = None
 
-    def __init__(
-        self, sim_core: MultiRobotSimulationCore, config: dict[str, Any] | None = None
-    ) -> None:
+    def __init__(self, sim_core: SimulationKernel, config: dict[str, Any] | None = None) -> None:
         self.sim_core = sim_core
         self.config: dict[str, Any] = dict(config or {})
 
@@ -48,7 +46,7 @@ class SimPlugin(AttributeState):
 
 def as_plugin(
     plugin_or_cls: SimPlugin | type[SimPlugin],
-    sim: MultiRobotSimulationCore,
+    sim: SimulationKernel,
     config: dict[str, Any] | None,
 ) -> SimPlugin:
     """The plugin ``register_plugin`` was given, or one made from a SimPlugin subclass.

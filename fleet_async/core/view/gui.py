@@ -20,7 +20,7 @@ from fleet_async.core.view.camera import DEFAULT_FOV_DEG, CameraView, SceneCamer
 
 if TYPE_CHECKING:
     from fleet_async.core.base.params import SimulationParams
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
     from fleet_async.core.world.state import KinematicState
 
 __all__ = [
@@ -65,7 +65,7 @@ class GuiCamera:
     track their bodies, ``orbit`` turns (:data:`ORBIT_DEGREES_PER_SECOND`), ``manual`` stays.
     """
 
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, sim: SimulationKernel) -> None:
         self._sim = sim
         self._camera: SceneCamera | None = None
         self._shown: tuple[float, ...] | None = None
@@ -120,7 +120,7 @@ def configure_visualizer(
         p.configureDebugVisualizer(p.COV_ENABLE_RGB_BUFFER_PREVIEW, 0, physicsClientId=client)
 
 
-def handle_keyboard(sim: MultiRobotSimulationCore) -> None:
+def handle_keyboard(sim: SimulationKernel) -> None:
     """Poll GUI keys: SPACE toggles pause."""
     events = p.getKeyboardEvents(physicsClientId=sim.client)
     if events.get(ord(" "), 0) & p.KEY_WAS_TRIGGERED:
@@ -201,7 +201,7 @@ class GuiApi:
             points = np.asarray(entity_positions, dtype=float).reshape(-1, 3)
             view = box_view(points.min(axis=0), points.max(axis=0), config, fov, aspect)
         else:
-            sim = cast("MultiRobotSimulationCore", self)
+            sim = cast("SimulationKernel", self)
             view = SceneCamera(sim, config, fov_deg=fov, aspect=aspect).view()
         if self.is_gui:
             distance, yaw, pitch, target = view
@@ -211,7 +211,7 @@ class GuiApi:
     def _start_gui_camera(self) -> None:
         """With a GUI: frame the window on the scene at the first step and keep it framed."""
         if self.is_gui and self._gui_camera is None:
-            sim = cast("MultiRobotSimulationCore", self)
+            sim = cast("SimulationKernel", self)
             self._gui_camera = GuiCamera(sim)
             # A high number runs late: the camera frames what the other handlers did.
             sim.events.on(SimEvents.POST_STEP, self._gui_camera.on_post_step, priority=300)

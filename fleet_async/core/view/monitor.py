@@ -21,6 +21,7 @@ from fleet_async.core.world.backend import display_available
 
 if TYPE_CHECKING:
     from fleet_async.core.base.params import SimulationParams
+    from fleet_async.core.bodies.sim_object import SimObject
     from fleet_async.core.world.world import World
 
 __all__ = ["DataMonitor", "MonitorApi", "SimulationMonitor"]
@@ -175,7 +176,7 @@ class MonitorApi:
     params: SimulationParams
     sim_time: float
     step_count: int
-    world: World
+    world: World[SimObject]
     collision_count: int
 
     def setup_monitor(self) -> None:

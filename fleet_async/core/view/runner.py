@@ -14,16 +14,41 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 from fleet_async.core.base.steps import steps_for
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.base.params import SimulationParams
 
-__all__ = ["RealTimePacer", "run_loop", "run_steps"]
+__all__ = ["PacedSim", "RealTimePacer", "run_loop", "run_steps"]
 
 logger = logging.getLogger(__name__)
+
+
+class PacedSim(Protocol):
+    """The simulation, as the run loop sees it: the kernel's clock, steps and idle spans, and
+    the monitor (``MonitorApi``, beside this module); ``MultiRobotSimulationCore`` has both."""
+
+    @property
+    def params(self) -> SimulationParams: ...
+
+    @property
+    def step_count(self) -> int: ...
+
+    @property
+    def sim_time(self) -> float: ...
+
+    @property
+    def is_paused(self) -> bool: ...
+
+    def step_once(self, return_profiling: bool = False) -> dict[str, Any] | None: ...
+
+    def idle_steps(self, limit: int) -> int: ...
+
+    def skip_steps(self, n: int) -> None: ...
+
+    def update_monitor(self) -> None: ...
 
 
 class RealTimePacer:
@@ -68,9 +93,7 @@ class RealTimePacer:
         return max(1, min(behind_steps, self.max_steps_per_frame))
 
 
-def run_steps(
-    sim: MultiRobotSimulationCore, steps: int | None, idle: Callable[[], None] | None = None
-) -> int:
+def run_steps(sim: PacedSim, steps: int | None, idle: Callable[[], None] | None = None) -> int:
     """Call ``sim.step_once()`` ``steps`` times (forever if None), paced at ``target_rtf``.
 
     Args:
@@ -114,7 +137,7 @@ def run_steps(
     return sim.step_count - start
 
 
-def _advance(sim: MultiRobotSimulationCore, n: int) -> None:
+def _advance(sim: PacedSim, n: int) -> None:
     """Run the frame's ``n`` steps, skipping the empty ones in spans (the frame ends at the
     same step either way, so pacing, the monitor and progress reports see the same frames)."""
     done = 0
@@ -128,9 +151,7 @@ def _advance(sim: MultiRobotSimulationCore, n: int) -> None:
             done += 1
 
 
-def run_loop(
-    sim: MultiRobotSimulationCore, duration: float, idle: Callable[[], None] | None = None
-) -> int:
+def run_loop(sim: PacedSim, duration: float, idle: Callable[[], None] | None = None) -> int:
     """Step ``sim`` for ``duration`` sim seconds (forever if <= 0); return steps run.
 
     Ctrl+C ends the run quietly (logged), as ``run_simulation`` promises.

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
@@ -20,15 +20,18 @@ from fleet_async.core.geometry.quaternions import compose_poses_batch
 from fleet_async.core.world.state import KinematicState
 
 if TYPE_CHECKING:
-    from fleet_async.core.bodies.sim_object import SimObject
+    from fleet_async.core.world.host import AttachedBody
 
 __all__ = ["Attachment", "AttachmentSet"]
 
-LinkPoseFn = Callable[["SimObject", int], tuple[np.ndarray, np.ndarray]]
+_B = TypeVar("_B", bound="AttachedBody")
+"""The handle class of the objects attached (``SimObject`` in a simulation)."""
+
+LinkPoseFn = Callable[[_B, int], tuple[np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True)
-class Attachment:
+class Attachment(Generic[_B]):
     """One child fixed to one parent link.
 
     Attributes:
@@ -38,13 +41,13 @@ class Attachment:
         relative: Child pose in the parent link's frame.
     """
 
-    parent: SimObject
-    child: SimObject
+    parent: _B
+    child: _B
     link_index: int
     relative: Pose
 
 
-class AttachmentSet:
+class AttachmentSet(Generic[_B]):
     """Every attachment of one simulation, indexed by child and by parent.
 
     Args:
@@ -53,25 +56,25 @@ class AttachmentSet:
             for non-base links.
     """
 
-    def __init__(self, store: KinematicState, link_pose: LinkPoseFn) -> None:
+    def __init__(self, store: KinematicState, link_pose: LinkPoseFn[_B]) -> None:
         self._store = store
         self._link_pose = link_pose
-        self._by_child: dict[int, Attachment] = {}  # child object_id -> attachment
-        self._children: dict[int, list[Attachment]] = {}  # parent object_id -> attachments
+        self._by_child: dict[int, Attachment[_B]] = {}  # child object_id -> attachment
+        self._children: dict[int, list[Attachment[_B]]] = {}  # parent object_id -> attachments
         self._plan: (
-            list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[Attachment]]] | None
+            list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[Attachment[_B]]]] | None
         ) = None
 
     def __len__(self) -> int:
         return len(self._by_child)
 
-    def add(self, attachment: Attachment) -> None:
+    def add(self, attachment: Attachment[_B]) -> None:
         """Register an attachment (the caller has validated it)."""
         self._by_child[attachment.child.object_id] = attachment
         self._children.setdefault(attachment.parent.object_id, []).append(attachment)
         self._plan = None
 
-    def remove(self, child: SimObject) -> Attachment | None:
+    def remove(self, child: _B) -> Attachment[_B] | None:
         """Drop the attachment holding ``child``; return it, or None if it had none."""
         att = self._by_child.pop(child.object_id, None)
         if att is None:
@@ -89,11 +92,11 @@ class AttachmentSet:
         self._children.clear()
         self._plan = None
 
-    def of_child(self, child: SimObject) -> Attachment | None:
+    def of_child(self, child: _B) -> Attachment[_B] | None:
         """The attachment holding ``child``, if any."""
         return self._by_child.get(child.object_id)
 
-    def children_of(self, parent: SimObject) -> list[SimObject]:
+    def children_of(self, parent: _B) -> list[_B]:
         """Objects attached to ``parent``, in attachment order."""
         return [a.child for a in self._children.get(parent.object_id, ())]
 
@@ -101,15 +104,15 @@ class AttachmentSet:
         """Object ids of everything that carries something."""
         return set(self._children)
 
-    def descendants(self, parent: SimObject) -> list[SimObject]:
+    def descendants(self, parent: _B) -> list[_B]:
         """Everything ``parent`` carries, directly or nested, parents before children."""
-        out: list[SimObject] = []
+        out: list[_B] = []
         for att in self._children.get(parent.object_id, ()):
             out.append(att.child)
             out.extend(self.descendants(att.child))
         return out
 
-    def is_ancestor(self, candidate: SimObject, obj: SimObject) -> bool:
+    def is_ancestor(self, candidate: _B, obj: _B) -> bool:
         """Whether ``candidate`` carries ``obj`` directly or through other attachments."""
         att = self._by_child.get(obj.object_id)
         while att is not None:
@@ -118,13 +121,13 @@ class AttachmentSet:
             att = self._by_child.get(att.parent.object_id)
         return False
 
-    def place_child(self, att: Attachment) -> None:
+    def place_child(self, att: Attachment[_B]) -> None:
         """Put one child where its attachment says, then its own children, recursively."""
         self.place_child_only(att)
         for grandchild in self._children.get(att.child.object_id, ()):
             self.place_child(grandchild)
 
-    def follow_parent(self, parent: SimObject) -> None:
+    def follow_parent(self, parent: _B) -> None:
         """Move everything ``parent`` carries after the parent itself moved."""
         for att in self._children.get(parent.object_id, ()):
             self.place_child(att)
@@ -145,7 +148,7 @@ class AttachmentSet:
             for att in link_atts:
                 self.place_child_only(att)
 
-    def place_child_only(self, att: Attachment) -> None:
+    def place_child_only(self, att: Attachment[_B]) -> None:
         """Place one child from its parent link without recursing (the plan orders depths)."""
         parent_pos, parent_orn = self._parent_frame(att)
         pos, orn = compose_poses_batch(
@@ -156,7 +159,7 @@ class AttachmentSet:
         )
         self._write(np.array([att.child.state_row]), pos, orn)
 
-    def _parent_frame(self, att: Attachment) -> tuple[np.ndarray, np.ndarray]:
+    def _parent_frame(self, att: Attachment[_B]) -> tuple[np.ndarray, np.ndarray]:
         if att.link_index == -1:
             row = att.parent.state_row
             return self._store.position[row], self._store.orientation[row]
@@ -173,7 +176,7 @@ class AttachmentSet:
             store.orientation[moved] = orn[changed]
             store.mark_moved(moved)
 
-    def _depth(self, att: Attachment) -> int:
+    def _depth(self, att: Attachment[_B]) -> int:
         depth = 0
         cur = self._by_child.get(att.parent.object_id)
         while cur is not None:
@@ -183,8 +186,8 @@ class AttachmentSet:
 
     def _build_plan(
         self,
-    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[Attachment]]]:
-        levels: dict[int, list[Attachment]] = {}
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[Attachment[_B]]]]:
+        levels: dict[int, list[Attachment[_B]]] = {}
         # Sorted by child id so the pass order is the same in every run.
         for child_id in sorted(self._by_child):
             att = self._by_child[child_id]

@@ -8,7 +8,7 @@ any simulation carry each other through ``bodies/standalone.py``.
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
@@ -17,35 +17,37 @@ from fleet_async.core.world.attachments import Attachment, AttachmentSet
 from fleet_async.core.world.links import UnknownNameError, link_index
 
 if TYPE_CHECKING:
-    from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.simulation import MultiRobotSimulationCore
     from fleet_async.core.world.backend import PyBulletBackend
+    from fleet_async.core.world.host import WorldBody
     from fleet_async.core.world.state import KinematicState
 
 __all__ = ["Carrying"]
 
 logger = logging.getLogger(__name__)
 
+_B = TypeVar("_B", bound="WorldBody")
+"""The handle class of the objects carried (``SimObject`` in a simulation)."""
 
-class Carrying:
+
+class Carrying(Generic[_B]):
     """Attach / detach of objects in one simulation (mixed into World)."""
 
     # Provided by World.
-    _sim: MultiRobotSimulationCore
+    _sim: object
     _backend: PyBulletBackend
     _store: KinematicState
-    _attachments: AttachmentSet
+    _attachments: AttachmentSet[_B]
     _saved_mass: dict[int, float]
     _dynamic_rows: np.ndarray
     in_step: bool
 
-    def link_pose(self, obj: SimObject, link_index: int) -> tuple[np.ndarray, np.ndarray]:
+    def link_pose(self, obj: _B, link_index: int) -> tuple[np.ndarray, np.ndarray]:
         raise NotImplementedError  # World's
 
     def attach(
         self,
-        parent: SimObject,
-        child: SimObject,
+        parent: _B,
+        child: _B,
         link: int | str,
         relative_pose: Pose | None,
         keep_world_pose: bool,
@@ -117,8 +119,8 @@ class Carrying:
 
     def detach(
         self,
-        parent: SimObject,
-        child: SimObject,
+        parent: _B,
+        child: _B,
         drop_pose: Pose | None,
         drop_relative_pose: Pose | None,
     ) -> bool:

@@ -26,8 +26,8 @@ from fleet_async.core.world.shapes import record_body_shape
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
-    from fleet_async.core.bodies.sim_object import SimObject
     from fleet_async.core.world.backend import PyBulletBackend
+    from fleet_async.core.world.host import PendingHandle
 
 __all__ = ["PENDING_BODY", "Deferred", "PendingBodies", "PendingBodiesApi", "PendingBody"]
 
@@ -53,7 +53,7 @@ class PendingBodies:
     """Bodies waiting to be created, grouped by (visual shape, collision shape, mass)."""
 
     def __init__(self) -> None:
-        self._groups: dict[PendingBody, dict[int, SimObject]] = {}  # row -> handle, in order
+        self._groups: dict[PendingBody, dict[int, PendingHandle]] = {}  # row -> handle, in order
         self._of_row: dict[int, PendingBody] = {}
 
     def collision_shape(self, row: int) -> int:
@@ -69,7 +69,7 @@ class PendingBodies:
     def __len__(self) -> int:
         return len(self._of_row)
 
-    def add(self, body: PendingBody, row: int, obj: SimObject) -> None:
+    def add(self, body: PendingBody, row: int, obj: PendingHandle) -> None:
         """Queue the body of ``obj`` (which holds ``row``)."""
         self._groups.setdefault(body, {})[row] = obj
         self._of_row[row] = body
@@ -111,7 +111,7 @@ class PendingBodies:
 
 
 def _place(
-    body: PendingBody, members: dict[int, SimObject], store: KinematicState, client: int
+    body: PendingBody, members: dict[int, PendingHandle], store: KinematicState, client: int
 ) -> bool:
     """Create ``members``' bodies in chunks; return whether a chunk held more than one."""
     rows = list(members)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import pybullet as p
@@ -29,16 +29,17 @@ from fleet_async.core.world.pending import (
 from fleet_async.core.world.state import COLLISION_CODES, KinematicState
 
 if TYPE_CHECKING:
-    from fleet_async.core.bodies.sim_object import SimObject
-    from fleet_async.core.bodies.standalone import StandaloneState
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.world.host import KeptOutside, WorldBody
 
 __all__ = ["World"]
 
 logger = logging.getLogger(__name__)
 
+_B = TypeVar("_B", bound="WorldBody")
+"""The handle class of the objects held (the kernel's world holds ``SimObject``)."""
 
-class World(Carrying, PendingBodiesApi):
+
+class World(Carrying[_B], PendingBodiesApi):
     """Objects, rows and attachments of one simulation.
 
     Args:
@@ -54,7 +55,7 @@ class World(Carrying, PendingBodiesApi):
 
     def __init__(
         self,
-        sim: MultiRobotSimulationCore,
+        sim: object,
         backend: PyBulletBackend,
         events: EventBus,
         physics: bool,
@@ -65,11 +66,11 @@ class World(Carrying, PendingBodiesApi):
         self._physics = physics
         self._store = KinematicState()
         self._attachments = AttachmentSet(self._store, self.link_pose)
-        self._objects: dict[int, SimObject] = {}
-        self._agents: dict[int, SimObject] = {}
-        self._updaters: dict[int, SimObject] = {}
-        self._with_callbacks: dict[int, SimObject] = {}
-        self._update_listeners: dict[int, SimObject] = {}
+        self._objects: dict[int, _B] = {}
+        self._agents: dict[int, _B] = {}
+        self._updaters: dict[int, _B] = {}
+        self._with_callbacks: dict[int, _B] = {}
+        self._update_listeners: dict[int, _B] = {}
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._saved_mass: dict[int, float] = {}
         self._next_id = 0
@@ -96,12 +97,12 @@ class World(Carrying, PendingBodiesApi):
         return self._attachments
 
     @property
-    def objects(self) -> list[SimObject]:
+    def objects(self) -> list[_B]:
         """Every object, in spawn order."""
         return list(self._objects.values())
 
     @property
-    def agents(self) -> list[SimObject]:
+    def agents(self) -> list[_B]:
         """Every agent, in spawn order."""
         return list(self._agents.values())
 
@@ -125,19 +126,19 @@ class World(Carrying, PendingBodiesApi):
         """An object of this simulation created its event bus (``obj.events``)."""
         self._entity_buses = True
 
-    def get(self, object_id: int) -> SimObject | None:
+    def get(self, object_id: int) -> _B | None:
         """The object with ``object_id``, or None."""
         return self._objects.get(object_id)
 
-    def objects_by_id(self) -> Mapping[int, SimObject]:
+    def objects_by_id(self) -> Mapping[int, _B]:
         """A read-only live view ``{object_id: object}``."""
         return MappingProxyType(self._objects)
 
-    def updaters(self) -> tuple[SimObject, ...]:
+    def updaters(self) -> tuple[_B, ...]:
         """Objects whose class overrides ``update(dt)``, in spawn order."""
         return tuple(self._updaters.values())
 
-    def objects_with_callbacks(self) -> tuple[SimObject, ...]:
+    def objects_with_callbacks(self) -> tuple[_B, ...]:
         """Objects with per-object callbacks, in spawn order."""
         return tuple(self._with_callbacks.values())
 
@@ -156,7 +157,7 @@ class World(Carrying, PendingBodiesApi):
             self._update_listeners,
         )
 
-    def clear(self) -> list[SimObject]:
+    def clear(self) -> list[_B]:
         """Unbind and forget every object (the PyBullet world is reset by the caller)."""
         removed = list(self._objects.values())
         for obj in removed:
@@ -171,7 +172,7 @@ class World(Carrying, PendingBodiesApi):
         self._store.clear()
         return removed
 
-    def add(self, obj: SimObject, notify: bool = True) -> None:
+    def add(self, obj: _B, notify: bool = True) -> None:
         """Register ``obj`` (``SimObject.__init__`` does this when given ``sim_core``).
 
         Raises:
@@ -229,7 +230,7 @@ class World(Carrying, PendingBodiesApi):
         if notify:
             self.announce(obj)
 
-    def _adopt_standalone(self, obj: SimObject, solo: StandaloneState, row: int) -> None:
+    def _adopt_standalone(self, obj: _B, solo: KeptOutside, row: int) -> None:
         """Bring in what ``obj`` kept outside a simulation: its pose, reaching this client's
         PyBullet, and attachments to objects already here (the others wait on their end)."""
         if solo.pose_written:
@@ -242,7 +243,7 @@ class World(Carrying, PendingBodiesApi):
                 solo.forget(record)
                 self.attach(record.parent, record.child, record.link_index, record.relative, False)
 
-    def announce(self, obj: SimObject) -> None:
+    def announce(self, obj: _B) -> None:
         """Emit the spawn events of ``obj`` (``add`` does it unless told not to)."""
         self._events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
         if obj.spawned_event is not None:
@@ -250,7 +251,7 @@ class World(Carrying, PendingBodiesApi):
         if obj.has_event_bus():
             obj.events.emit(SimEvents.OBJECT_SPAWNED, sim=self._sim, obj=obj)
 
-    def remove(self, obj: SimObject) -> None:
+    def remove(self, obj: _B) -> None:
         """Remove ``obj`` from the simulation and PyBullet; its children are detached in place.
 
         Raises:
@@ -353,7 +354,7 @@ class World(Carrying, PendingBodiesApi):
 
     # ----- hooks called by SimObject handles ----------------------------------------------
 
-    def on_pose_written(self, obj: SimObject, preserve_velocity: bool) -> None:
+    def on_pose_written(self, obj: _B, preserve_velocity: bool) -> None:
         """A handle changed its row's pose: move its children, sync PyBullet if needed now."""
         self._attachments.follow_parent(obj)
         row = obj.state_row
@@ -363,9 +364,7 @@ class World(Carrying, PendingBodiesApi):
             rows = [row] + [c.state_row for c in self._attachments.descendants(obj)]
             self._backend.push_rows(self._store, np.array(rows, dtype=np.int64))
 
-    def on_collision_mode_changed(
-        self, obj: SimObject, old: CollisionMode, new: CollisionMode
-    ) -> None:
+    def on_collision_mode_changed(self, obj: _B, old: CollisionMode, new: CollisionMode) -> None:
         """Apply a collision mode change to PyBullet's contact filter (a pending body gets
         the filter of its mode when it is created)."""
         if obj.raw_body_id < 0:
@@ -379,14 +378,14 @@ class World(Carrying, PendingBodiesApi):
                 obj.body_id, -1, 1, -1, physicsClientId=self._backend.client
             )
 
-    def on_object_callbacks_changed(self, obj: SimObject) -> None:
+    def on_object_callbacks_changed(self, obj: _B) -> None:
         """Track which objects have per-object callbacks (so steps skip the others)."""
         if obj.has_callbacks():
             self._with_callbacks[obj.object_id] = obj
         else:
             self._with_callbacks.pop(obj.object_id, None)
 
-    def on_entity_handlers_changed(self, obj: SimObject) -> None:
+    def on_entity_handlers_changed(self, obj: _B) -> None:
         """Track which objects listen to their own PRE_UPDATE / POST_UPDATE (only those pay)."""
         bus = obj.events if obj.has_event_bus() else None
         if bus is not None and (
@@ -408,7 +407,7 @@ class World(Carrying, PendingBodiesApi):
         """Whether any object listens to its own PRE_UPDATE / POST_UPDATE."""
         return bool(self._update_listeners)
 
-    def emit_pre_update(self, dt: float) -> list[tuple[SimObject, np.ndarray]]:
+    def emit_pre_update(self, dt: float) -> list[tuple[_B, np.ndarray]]:
         """PRE_UPDATE on each listening object's bus (``dt``), in object id order; returns
         their poses before the motion phase, for :meth:`emit_post_update`."""
         store, out = self._store, []
@@ -419,7 +418,7 @@ class World(Carrying, PendingBodiesApi):
             obj.events.emit(SimEvents.PRE_UPDATE, sim=self._sim, dt=dt)
         return out
 
-    def emit_post_update(self, dt: float, before: list[tuple[SimObject, np.ndarray]]) -> None:
+    def emit_post_update(self, dt: float, before: list[tuple[_B, np.ndarray]]) -> None:
         """POST_UPDATE on each listening object's bus (``dt``, ``moved``)."""
         store = self._store
         for obj, pose in before:
@@ -439,13 +438,13 @@ class World(Carrying, PendingBodiesApi):
         else:
             p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=self._backend.client)
 
-    def sync_object(self, obj: SimObject) -> None:
+    def sync_object(self, obj: _B) -> None:
         """Push ``obj``'s pose to PyBullet now if the store has a newer one."""
         row = obj.state_row
         if self._store.dirty[row]:
             self._backend.push_rows(self._store, np.array([row]))
 
-    def link_pose(self, obj: SimObject, link_index: int) -> tuple[np.ndarray, np.ndarray]:
+    def link_pose(self, obj: _B, link_index: int) -> tuple[np.ndarray, np.ndarray]:
         """World (position, orientation) of one link of ``obj``, from PyBullet's kinematics."""
         self.sync_object(obj)
         state = p.getLinkState(

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from fleet_async.core.view.trace.writer import TraceWriter
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["TraceApi"]
 
@@ -60,7 +60,7 @@ class TraceApi:
             )
         if every_n_steps is not None and fps is not None:
             raise ValueError("start_trace: give every_n_steps or fps, not both")
-        sim: MultiRobotSimulationCore = self  # type: ignore[assignment]  # mixed into the sim
+        sim: SimulationKernel = self  # type: ignore[assignment]  # mixed into the sim
         if fps is not None:
             if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0:
                 raise ValueError(f"start_trace fps: expected a number > 0, got {fps!r}")

@@ -25,7 +25,7 @@ if sys.version_info < (3, 11):  # anyio depends on the backport there
     from exceptiongroup import BaseExceptionGroup
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["TraceEventLog", "json_bytes"]
 
@@ -47,7 +47,7 @@ class TraceEventLog:
         sim: The traced simulation.
     """
 
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, sim: SimulationKernel) -> None:
         self._sim = sim
         self._events: list[list[Any]] = []
         # Collisions arrive by the hundred per step at fleet scale: the collision system hands

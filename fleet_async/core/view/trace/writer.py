@@ -45,7 +45,7 @@ from fleet_async.core.view.trace.frames import FrameBuffer, HeadingTracker
 from fleet_async.core.world.state import COLLISION_CODES
 
 if TYPE_CHECKING:
-    from fleet_async.core.simulation import MultiRobotSimulationCore
+    from fleet_async.core.sim.kernel import SimulationKernel
 
 __all__ = ["TraceWriter"]
 
@@ -71,7 +71,7 @@ class TraceWriter:
 
     def __init__(
         self,
-        sim: MultiRobotSimulationCore,
+        sim: SimulationKernel,
         path: str | os.PathLike[str],
         every_n_steps: int = 1,
         *,
