@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-LAYOUT = HERE / "scenarios" / "served_warehouse_layout.yaml"
+LAYOUT = HERE / "layouts" / "served_warehouse.yaml"
 SCENARIO = HERE / "scenarios" / "served_warehouse.yaml"
 
 

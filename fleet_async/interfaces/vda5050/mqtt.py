@@ -213,10 +213,8 @@ class MqttTransport:
         link.publish("connection", lambda: json.dumps(body), 1, True)
         self._publish_factsheet(link)
 
-    def _publish_factsheet(self, link: VehicleLink, header: dict[str, Any] | None = None) -> None:
-        if header is None:
-            header = self._header(link, "factsheet")
-        body = {**header, **self._factsheets[link.robot]}
+    def _publish_factsheet(self, link: VehicleLink) -> None:
+        body = {**self._header(link, "factsheet"), **self._factsheets[link.robot]}
         link.publish("factsheet", lambda: json.dumps(body), 0, True)
 
     def on_state(self, snapshot: VehicleSnapshot, reasons: tuple[str, ...]) -> None:
@@ -258,5 +256,7 @@ class MqttTransport:
         """Publish the factsheet again (FleetListener)."""
         link = self._links[vehicle]
         if link.connected.is_set():  # stamped now, at the step that answers the request
-            header = self._header(link, "factsheet")
-            self.loop.call_soon(lambda: self._publish_factsheet(link, header))
+            body = {**self._header(link, "factsheet"), **self._factsheets[link.robot]}
+            # Through the outbox: after the state that reports the request FINISHED.
+            self.loop.publish(link.client, link.topics["factsheet"], lambda: json.dumps(body),
+                              0, True)  # fmt: skip

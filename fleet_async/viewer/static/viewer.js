@@ -1,8 +1,11 @@
 // The replay viewer: loads the trace as it streams in, plays it on a sim-time clock, draws it
-// top-down, and lists a selected robot's actions and events.
+// top-down, and lists a selected robot's actions and events. A selected served vehicle (one
+// fleet masters send orders to) also shows its order, its task states and the commands it
+// received, and its route still to go is drawn on the canvas.
 //
 // Test and benchmark hooks: window.viewer (seek, play, pause, setSpeed, select, project,
-// bodyAt, state, stats), and #app's data-state / data-sim-time / data-frame / data-selected.
+// bodyAt, route, overlayPixelAt, state, stats), and #app's data-state / data-sim-time /
+// data-frame / data-selected / data-route-nodes.
 "use strict";
 
 (function () {
@@ -133,9 +136,25 @@
 
   // ----- camera -----------------------------------------------------------------------------
 
+  // The largest footprint radius of the moving bodies: the bounds hold their centres only, so
+  // fit() pads by it to show the robots at the edge of the run whole.
+  let padCache = { bodies: -1, pad: 0 };
+  function movingPad() {
+    if (padCache.bodies === data.bodies.size) return padCache.pad;
+    let pad = 0;
+    for (const body of data.bodies.values()) {
+      const s = body.shapeInfo;
+      if (body.kind !== "static" && s) pad = Math.max(pad, s.radius || Math.hypot(s.half[0], s.half[1]));
+    }
+    padCache = { bodies: data.bodies.size, pad };
+    return pad;
+  }
+
   function fit() {
-    const b = data.bounds;
-    if (!b) return;
+    const bounds = data.bounds;
+    if (!bounds) return;
+    const m = movingPad();
+    const b = [bounds[0] - m, bounds[1] - m, bounds[2] + m, bounds[3] + m];
     const w = Math.max(b[2] - b[0], 1), h = Math.max(b[3] - b[1], 1);
     view.cx = (b[0] + b[2]) / 2;
     view.cy = (b[1] + b[3]) / 2;
@@ -227,7 +246,7 @@
     stats.frames++;
     stats.drawMs.push(performance.now() - t0);
     if (stats.drawMs.length > 600) stats.drawMs.shift();
-    if (ui.selected !== null) updatePose(f0);
+    if (ui.selected !== null) { updatePose(f0); updateVehicle(false); }
   }
 
   function zrange() {
@@ -329,9 +348,11 @@
         ctx.fillText(`\u00d7${count}`, p.x + 6, p.y - 6);
       }
     }
-    if (ui.selected === null) return;
+    drawnRoute = null;
+    if (ui.selected === null) { app.dataset.routeNodes = ""; return; }
     const pose = bodyPose(f0, f1, alpha, ui.selected);
-    if (!pose) return;
+    if (!pose) { app.dataset.routeNodes = ""; return; }
+    drawRoute(ctx, pose);
     const b = data.bodies.get(ui.selected);
     const s = b && b.shapeInfo;
     const r = Math.max(8, (s ? (s.radius || Math.hypot(s.half[0], s.half[1])) : 0.1) * view.scale + 4);
@@ -340,6 +361,49 @@
     ctx.beginPath(); ctx.arc(p.x, p.y, r, 0, 2 * Math.PI); ctx.stroke();
     ctx.font = "12px sans-serif"; ctx.fillStyle = "#111";
     ctx.fillText(b && b.name ? b.name : `#${ui.selected}`, p.x + r + 3, p.y - r);
+  }
+
+  // A served vehicle's route still to go at the clock's time: from the robot through its
+  // remaining nodes in order; released (base) part solid, horizon part dashed and lighter;
+  // nodes as circles (released filled, horizon hollow) labelled with their ids.
+  const ROUTE_COLOUR = "#00796b", ROUTE_HORIZON = "rgba(0, 121, 107, 0.5)";
+  let drawnRoute = null;   // what was drawn last, for tests (viewer.route())
+
+  function drawRoute(ctx, pose) {
+    const state = data.vehicleStateAt(ui.selected, clock.t);
+    const all = state && state.data && Array.isArray(state.data.nodes) ? state.data.nodes : [];
+    const nodes = all.filter((n) => Number.isFinite(n[3]) && Number.isFinite(n[4]));
+    app.dataset.routeNodes = String(nodes.length);
+    if (!nodes.length) return;
+    const start = project(pose.x, pose.y);
+    const points = nodes.map(([id, sequence, released, x, y]) => {
+      const p = project(x, y);
+      return { node_id: id, sequence, released: !!released, x, y, px: p.x, py: p.y };
+    });
+    drawnRoute = { vehicle: state.data.vehicle, order_id: state.data.order_id, from: { x: pose.x, y: pose.y, px: start.x, py: start.y }, points };
+    ctx.save();
+    ctx.lineCap = "round"; ctx.lineJoin = "round";
+    let prev = { px: start.x, py: start.y };
+    for (const q of points) {   // a segment is released when the node it leads to is
+      ctx.beginPath();
+      ctx.moveTo(prev.px, prev.py); ctx.lineTo(q.px, q.py);
+      if (q.released) { ctx.setLineDash([]); ctx.strokeStyle = ROUTE_COLOUR; ctx.lineWidth = 3; }
+      else { ctx.setLineDash([7, 5]); ctx.strokeStyle = ROUTE_HORIZON; ctx.lineWidth = 2; }
+      ctx.stroke();
+      prev = q;
+    }
+    ctx.setLineDash([]);
+    ctx.font = "11px sans-serif";
+    for (const q of points) {
+      ctx.beginPath();
+      ctx.arc(q.px, q.py, 5, 0, 2 * Math.PI);
+      if (q.released) { ctx.fillStyle = ROUTE_COLOUR; ctx.fill(); }
+      else { ctx.fillStyle = "#fff"; ctx.fill(); ctx.strokeStyle = ROUTE_HORIZON; ctx.lineWidth = 2; ctx.stroke(); }
+      ctx.lineWidth = 3; ctx.strokeStyle = "#fff"; ctx.fillStyle = q.released ? ROUTE_COLOUR : "#4a7f79";
+      ctx.strokeText(String(q.node_id), q.px + 7, q.py + 14);
+      ctx.fillText(String(q.node_id), q.px + 7, q.py + 14);
+    }
+    ctx.restore();
   }
 
   // ----- picking and the side panel -----------------------------------------------------------
@@ -377,8 +441,43 @@
     return ui.selected;
   }
 
+  function idList(ids) {
+    return ids.length <= 8 ? ids.join(" ") : `${ids.slice(0, 3).join(" ")} … ${ids.slice(-2).join(" ")} (${ids.length})`;
+  }
+
+  function describeVehicleState(d) {
+    const parts = [d.order_id ? `order ${d.order_id}/${d.order_update}` : "no order"];
+    if (d.last_node) parts.push(`last node ${d.last_node}`);
+    const nodes = d.nodes || [];
+    parts.push(nodes.length ? `${nodes.length} node${nodes.length > 1 ? "s" : ""} to go` : "nothing to go");
+    const tasks = (d.tasks || []).map(([id, , status]) => `${id} ${status}`);
+    if (tasks.length) parts.push(`tasks ${tasks.join(", ")}`);
+    if (d.paused) parts.push("paused");
+    if (d.errors && d.errors.length) parts.push(`${d.errors.length} error${d.errors.length > 1 ? "s" : ""}`);
+    return `vehicle state: ${parts.join(", ")}`;
+  }
+
+  function describeCommand(c) {
+    const cmd = c.command || {};
+    const tasksOf = (list) => (list || []).map((k) => `${k.kind} ${k.task_id}`).join(", ");
+    if (cmd.type === "order") {
+      const nodes = cmd.nodes || [];
+      const base = nodes.filter((n) => n.released).map((n) => n.node_id);
+      const horizon = nodes.filter((n) => !n.released).map((n) => n.node_id);
+      let text = `order ${cmd.order_id} update ${cmd.update}: nodes ${idList(base)}`;
+      if (horizon.length) text += ` + horizon ${idList(horizon)}`;
+      const tasks = tasksOf(nodes.flatMap((n) => n.tasks || []));
+      if (tasks) text += `; tasks ${tasks}`;
+      return text;
+    }
+    if (cmd.type === "instant") return `instant ${tasksOf(cmd.tasks)}`;
+    if (cmd.type === "rejection") return `rejected ${cmd.kind}${cmd.description ? ": " + cmd.description : ""}`;
+    return String(cmd.type);
+  }
+
   function describeEvent(e) {
     const d = e.data || {};
+    if (e.kind === "vehicle_state") return describeVehicleState(d);
     if (e.kind === "action_started") return `${d.action} started`;
     if (e.kind === "action_ended") return `${d.action} ${d.status}${d.reason ? ": " + d.reason : ""}`;
     const rest = Object.entries(d).map(([k, v]) => `${k}=${typeof v === "object" ? JSON.stringify(v) : v}`).join(" ");
@@ -387,9 +486,13 @@
 
   function updateSelection() {
     const panel = $("details");
-    if (ui.selected === null) { panel.hidden = true; return; }
+    const wasHidden = panel.hidden;
+    panel.hidden = ui.selected === null;
+    // The panel takes width from the stage: size the canvases to it again (else they are
+    // drawn squeezed, and circles become ellipses).
+    if (panel.hidden !== wasHidden) resize();
+    if (ui.selected === null) return;
     const b = data.bodies.get(ui.selected);
-    panel.hidden = false;
     $("sel-name").textContent = b ? `${b.name || "(unnamed)"}  #${b.id}` : `#${ui.selected}`;
     $("sel-kind").textContent = b ? `${b.kind} · ${b.class}` : "";
     const list = $("sel-events");
@@ -414,6 +517,89 @@
       return li;
     }));
     $("sel-count").textContent = `${items.filter((x) => x.kind.startsWith("action")).length} action events, ${collisions} collision events`;
+    updateVehicle(true);
+  }
+
+  // The served-vehicle part of the panel. The command list is rebuilt when the selection or
+  // the data change; the state part when the state at the clock's time is another event, so a
+  // render costs a binary search when nothing changed.
+  const vehicleView = { id: null, state: undefined, current: undefined, commands: [] };
+
+  function updateVehicle(rebuild) {
+    const section = $("sel-vehicle");
+    const b = ui.selected === null ? null : data.bodies.get(ui.selected);
+    if (!b || !data.isServed(b)) {
+      section.hidden = true;
+      vehicleView.id = null;
+      app.dataset.orderId = "";
+      return;
+    }
+    section.hidden = false;
+    if (rebuild || vehicleView.id !== b.id) {
+      vehicleView.id = b.id;
+      vehicleView.state = undefined;
+      vehicleView.current = undefined;
+      vehicleView.commands = data.vehicleCommands.get(b.name) || [];
+      $("sel-command-count").textContent = `(${vehicleView.commands.length})`;
+      $("sel-commands").replaceChildren(...vehicleView.commands.map((c) => {
+        const li = document.createElement("li");
+        li.className = `command ${c.command && c.command.type}`;
+        li.dataset.t = String(c.t);
+        li.textContent = `${c.t.toFixed(2)} s  ${describeCommand(c)}`;
+        li.title = JSON.stringify(c.command);
+        li.onclick = () => { setPlaying(false); seek(c.t); };
+        return li;
+      }));
+    }
+    const state = data.vehicleStateAt(b.id, clock.t);
+    if (state !== vehicleView.state) {
+      vehicleView.state = state;
+      showVehicleState(state ? state.data || {} : null);
+    }
+    // Commands at or before the clock are done; the latest of them is the current one.
+    const current = TraceData.lastAt(vehicleView.commands, clock.t);
+    if (current !== vehicleView.current) {
+      vehicleView.current = current;
+      $("sel-commands").querySelectorAll("li").forEach((li, i) => {
+        li.classList.toggle("future", i > current);
+        li.classList.toggle("current", i === current);
+      });
+    }
+  }
+
+  function showVehicleState(d) {
+    app.dataset.orderId = d && d.order_id ? String(d.order_id) : "";
+    if (!d) {
+      $("sel-order").textContent = "no order yet";
+      $("sel-route").textContent = "";
+      $("sel-tasks").hidden = true;
+      $("sel-errors").hidden = true;
+      return;
+    }
+    const order = d.order_id ? `order ${d.order_id} · update ${d.order_update}` : "no order";
+    $("sel-order").textContent = `${order} · last node ${d.last_node || "–"}${d.paused ? " · paused" : ""}`;
+    const nodes = d.nodes || [], edges = d.edges || [];
+    const split = (list, at) => [list.filter((x) => x[at]).map((x) => x[0]), list.filter((x) => !x[at]).map((x) => x[0])];
+    const [nb, nh] = split(nodes, 2), [eb, eh] = split(edges, 2);
+    const line = (what, base, horizon) => `${what} ${base.length ? idList(base) : "–"}${horizon.length ? " | horizon " + idList(horizon) : ""}`;
+    $("sel-route").textContent = nodes.length || edges.length
+      ? `${line("nodes to go:", nb, nh)}\n${line("edges to go:", eb, eh)}`
+      : d.order_id ? "order done: no nodes to go" : "";
+    const tasks = d.tasks || [];
+    $("sel-tasks").hidden = tasks.length === 0;
+    $("sel-tasks").tBodies[0].replaceChildren(...tasks.map(([id, kind, status]) => {
+      const tr = document.createElement("tr");
+      tr.className = `task ${status}`;
+      for (const v of [id, kind, status]) { const td = document.createElement("td"); td.textContent = String(v); tr.append(td); }
+      return tr;
+    }));
+    const errors = d.errors || [];
+    $("sel-errors").hidden = errors.length === 0;
+    $("sel-errors").replaceChildren(...errors.map(([kind, description]) => {
+      const li = document.createElement("li");
+      li.textContent = `${kind}: ${description}`;
+      return li;
+    }));
   }
 
   function updatePose(f0) {
@@ -485,6 +671,12 @@
     // Colour of the bodies layer at CSS pixel (x, y) of the stage: [r, g, b, a], 0..255.
     pixelAt: (x, y) => renderer.pixelAt(x * view.dpr, y * view.dpr),
     stateColours: () => ({ ...STATE_COLOURS }),
+    // The route drawn for the selected served vehicle (null if none): vehicle, order_id, from
+    // (the robot) and points (its nodes still to go), each with world x, y and CSS px, py.
+    route: () => (drawnRoute ? JSON.parse(JSON.stringify(drawnRoute)) : null),
+    vehicleStateAt: (id, t) => data.vehicleStateAt(id, t === undefined ? clock.t : t),
+    // Colour of the overlay (selection, route, labels) at CSS pixel (x, y): [r, g, b, a].
+    overlayPixelAt: (x, y) => Array.from(overlay.getContext("2d").getImageData(Math.round(x * view.dpr), Math.round(y * view.dpr), 1, 1).data),
     poseOf: (id) => { const i = frameIndex(); return bodyPose(i >= 0 ? data.frames[i] : null, null, 0, id); },
     setZRange: (lo, hi) => { $("zmin").value = lo === null ? "" : String(lo); $("zmax").value = hi === null ? "" : String(hi); dirty = true; render(); },
     setColorMode: (m) => { ui.colorMode = m; $("colour").value = m; dirty = true; render(); },
