@@ -68,7 +68,9 @@ class NetworkLoop:
         self._wake_w.setblocking(False)
         self._selector.register(self._wake_r, selectors.EVENT_READ, None)
         self._calls: deque[Callable[[], None]] = deque()
+        # Two queues: states, connection and factsheet messages go out before visualization.
         self._outbox: deque[tuple[Any, str, Callable[[], bytes | str], int, bool]] = deque()
+        self._visual: deque[tuple[Any, str, Callable[[], bytes | str], int, bool]] = deque()
         self._clients: list[Any] = []
         self._reconnect_at: dict[Any, tuple[float, int]] = {}
         self._stopping = False
@@ -100,15 +102,21 @@ class NetworkLoop:
         retain: bool = False,
         visualization: bool = False,
     ) -> bool:
-        """Queue a message; ``payload()`` is called on the network thread. False if dropped."""
-        backlog = len(self._outbox)
+        """Queue a message; ``payload()`` is called on the network thread. False if dropped.
+
+        Visualization messages wait behind every other message (a state is not held up by a
+        fleet's worth of poses queued before it) and are the first dropped.
+        """
+        backlog = len(self._outbox) + len(self._visual)
         if visualization and backlog >= self._budget:
             self.stats.dropped_visualizations += 1
             return False
         if backlog >= self._limit:
             self.stats.dropped_other += 1
             return False
-        self._outbox.append((client, topic, payload, qos, retain))
+        (self._visual if visualization else self._outbox).append(
+            (client, topic, payload, qos, retain)
+        )
         if backlog == 0:
             self._wake()
         return True
@@ -192,7 +200,7 @@ class NetworkLoop:
             if now >= next_misc:
                 next_misc = now + _MISC_PERIOD_S
                 self._misc(now)
-            if self._stopping and not self._outbox and not self._calls:
+            if self._stopping and not self._outbox and not self._visual and not self._calls:
                 self._flush()
                 if self._before_exit is not None:
                     self._before_exit()
@@ -208,10 +216,11 @@ class NetworkLoop:
                 logger.exception("MQTT network thread: a call failed")
 
     def _drain_outbox(self) -> None:
-        outbox, stats = self._outbox, self.stats
-        stats.highest_backlog = max(stats.highest_backlog, len(outbox))
-        while outbox:
-            client, topic, payload, qos, retain = outbox.popleft()
+        outbox, visual, stats = self._outbox, self._visual, self.stats
+        stats.highest_backlog = max(stats.highest_backlog, len(outbox) + len(visual))
+        while outbox or visual:
+            queue = outbox if outbox else visual
+            client, topic, payload, qos, retain = queue.popleft()
             try:
                 client.publish(topic, payload(), qos, retain)
             except Exception:
