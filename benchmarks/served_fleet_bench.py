@@ -139,8 +139,8 @@ def main() -> None:
     t0 = time.perf_counter()
     run_steps(sim, steps)
     run_s = time.perf_counter() - t0
-    stats, loop = transport.stats, transport.loop.stats
     transport.stop()
+    stats, sent = transport.stats, transport.sent_summary()
     dispatcher.send_signal(signal.SIGINT)
     dispatcher.wait(60)
     time.sleep(1.0)  # the last messages reach the subscriber
@@ -156,16 +156,16 @@ def main() -> None:
         "real_time_factor": round(sim.sim_time / run_s, 4),
         "target_rtf": args.rtf,
         "connect_seconds": round(connect_s, 2),
-        "states_published": stats.states,
+        "states_published": sent["states_sent"],
         "states_received": received["received"]["state"],
-        "visualizations_published": stats.visualizations,
+        "visualizations_published": sent["visualizations_sent"],
         "visualizations_received": received["received"]["visualization"],
         "visualization_share_received": round(
-            received["received"]["visualization"] / max(1, stats.visualizations), 4
+            received["received"]["visualization"] / max(1, sent["visualizations_sent"]), 4
         ),
-        "dropped_states": stats.dropped_states + loop.dropped_other,
-        "dropped_visualizations": stats.dropped_visualizations,
-        "highest_backlog": loop.highest_backlog,
+        "dropped_states": sent["states_dropped"],
+        "dropped_visualizations": sent["visualizations_dropped"],
+        "highest_backlog": sent["highest_backlog"],
         "header_gaps_at_subscriber": received["header_gaps"],
         "orders_sent": dispatched["orders_sent"],
         "orders_finished": dispatched["orders_finished"],

@@ -38,7 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--broker",
         help="mqtt://host:port (mqtts:// for TLS) of the broker; default: the scenario's "
-        "serve.broker, else an embedded broker on 127.0.0.1 (a free port, printed)",
+        "serve.broker, else an embedded broker on 127.0.0.1:1883 (another free port if that "
+        "one is taken; printed)",
     )
     parser.add_argument("--username", help="broker user name")
     parser.add_argument("--password", help="broker password")
@@ -151,12 +152,13 @@ def _serve(sim: Any, path: Path, args: argparse.Namespace) -> int:
     finally:
         if args.trace:
             sim.stop_trace()
-    stats = transport.stats
+    stats, sent = transport.stats, transport.sent_summary()
     print(
         f"stopped at sim time {sim.sim_time:.1f} s: {stats.received} messages received "
-        f"({stats.rejected} refused), {stats.states} states and {stats.visualizations} "
-        f"visualization messages published ({stats.dropped_states} states and "
-        f"{stats.dropped_visualizations} visualization messages dropped while offline)",
+        f"({stats.rejected} refused), {sent['states_sent']} states and "
+        f"{sent['visualizations_sent']} visualization messages published "
+        f"({sent['states_dropped']} states and {sent['visualizations_dropped']} visualization "
+        "messages dropped: vehicles offline, or a broker that did not keep up)",
         file=sys.stdout,
     )
     return 0

@@ -79,7 +79,12 @@ class BrokerAddress:
 
 @dataclass
 class TransportStats:
-    """What the transport did (counts since start)."""
+    """What the transport did (counts since start).
+
+    ``states`` and ``visualizations`` count messages handed to the network thread;
+    ``dropped_*`` those a vehicle did not send because it was offline, plus (``sent_summary``)
+    the visualization messages the network thread dropped because the broker did not keep up.
+    """
 
     states: int = 0
     visualizations: int = 0
@@ -196,6 +201,17 @@ class MqttTransport:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+    def sent_summary(self) -> dict[str, int]:
+        """States and visualization messages sent and dropped, the network thread's drops in."""
+        stats, loop = self.stats, self.loop.stats
+        return {
+            "states_sent": stats.states - loop.dropped_other,
+            "states_dropped": stats.dropped_states + loop.dropped_other,
+            "visualizations_sent": stats.visualizations - loop.dropped_visualizations,
+            "visualizations_dropped": stats.dropped_visualizations + loop.dropped_visualizations,
+            "highest_backlog": loop.highest_backlog,
+        }
 
     # ----- what vehicles say ------------------------------------------------------------------
 

@@ -7,11 +7,13 @@ message. Here one thread runs them all: it waits on every connection's socket at
 the ones that dropped, with a backoff.
 
 Every paho call happens on this thread. Other threads hand it work through two queues: calls
-(``call_soon``) and messages to publish (``publish``), the latter with a budget: when more than
-``visualization_budget`` messages wait, visualization messages are dropped (and counted) before
-anything else, so a slow broker costs pictures, not states; past ``outbox_limit`` a state is
-dropped too (counted). Handing a message over never blocks: the simulation's thread appends to
-a deque and, when the deque was empty, wakes the network thread with one byte.
+(``call_soon``) and messages to publish (``publish``). Visualization messages wait behind the
+others and are the first dropped (and counted): when more than ``visualization_budget``
+messages wait, or when a connection holds :data:`UNSENT_LIMIT` messages it could not write yet
+(a broker that does not keep up), so a slow broker costs pictures, not states; past
+``outbox_limit`` anything is dropped (counted). Handing a message over never blocks: the
+simulation's thread appends to a deque and, when the deque was empty, wakes the network thread
+with one byte.
 """
 
 from __future__ import annotations
@@ -34,6 +36,11 @@ logger = logging.getLogger(__name__)
 _MISC_PERIOD_S = 0.5  # keepalive pings, timeouts and due reconnects, this often
 _SELECT_TIMEOUT_S = 0.1
 _BACKOFF_S = (1.0, 2.0, 4.0, 8.0)
+SEND_BUFFER_BYTES = 64 * 1024
+"""Each connection's socket send buffer."""
+UNSENT_LIMIT = 32
+"""Messages a connection may hold unwritten (a slow broker) before its visualization is
+dropped instead of queued behind them."""
 
 
 @dataclass
@@ -72,6 +79,7 @@ class NetworkLoop:
         self._outbox: deque[tuple[Any, str, Callable[[], bytes | str], int, bool]] = deque()
         self._visual: deque[tuple[Any, str, Callable[[], bytes | str], int, bool]] = deque()
         self._clients: list[Any] = []
+        self._unsent: dict[Any, int] = {}  # per client: handed to paho, not yet written
         self._reconnect_at: dict[Any, tuple[float, int]] = {}
         self._stopping = False
         self._before_exit: Callable[[], None] | None = None
@@ -146,7 +154,9 @@ class NetworkLoop:
         client.on_socket_close = self._on_socket_close
         client.on_socket_register_write = self._on_register_write
         client.on_socket_unregister_write = self._on_unregister_write
+        client.on_publish = self._on_publish
         self._clients.append(client)
+        self._unsent[client] = 0
 
     def detach(self, client: Any) -> None:
         """Stop running ``client``."""
@@ -164,7 +174,15 @@ class NetworkLoop:
         """``client`` is connected: its backoff starts over."""
         self._reconnect_at.pop(client, None)
 
+    def _on_publish(self, client: Any, userdata: Any, mid: Any, code: Any, props: Any) -> None:
+        # QoS 0: written to the socket; QoS 1: acknowledged.
+        self._unsent[client] = max(0, self._unsent.get(client, 0) - 1)
+
     def _on_socket_open(self, client: Any, userdata: Any, sock: Any) -> None:
+        # A small send buffer makes a broker that does not keep up show soon, as messages
+        # paho cannot write (a vehicle sends a few kB per second).
+        with contextlib.suppress(OSError, AttributeError):
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER_BYTES)
         self._selector.register(sock, selectors.EVENT_READ, client)
 
     def _on_socket_close(self, client: Any, userdata: Any, sock: Any) -> None:
@@ -218,14 +236,19 @@ class NetworkLoop:
     def _drain_outbox(self) -> None:
         outbox, visual, stats = self._outbox, self._visual, self.stats
         stats.highest_backlog = max(stats.highest_backlog, len(outbox) + len(visual))
+        unsent = self._unsent
         while outbox or visual:
             queue = outbox if outbox else visual
             client, topic, payload, qos, retain = queue.popleft()
+            if queue is visual and unsent.get(client, 0) >= UNSENT_LIMIT:
+                stats.dropped_visualizations += 1  # the broker does not keep up: a picture less
+                continue
             try:
                 client.publish(topic, payload(), qos, retain)
             except Exception:
                 logger.exception("MQTT network thread: publishing on %s failed", topic)
                 continue
+            unsent[client] = unsent.get(client, 0) + 1
             stats.published += 1
 
     def _misc(self, now: float) -> None:

@@ -2,15 +2,17 @@
 
 The scenario's ``serve:`` section picks the served robots (``robots:``, default all) and sets
 the :class:`Vda5050Config` keys and the ``broker``; the command line overrides them. Without a
-broker URL an embedded broker is started on 127.0.0.1 (the ``vda5050`` extra ships it), so a
-fresh clone serves a fleet with no broker installed. The scenario's missions drive the robots
-that are not served, in the same run.
+broker URL an embedded broker is started on 127.0.0.1 (the ``vda5050`` extra ships it), on
+port 1883 when nothing listens there (else a free port; the command prints it), so a fresh
+clone serves a fleet with no broker installed and a master finds it at MQTT's usual address.
+The scenario's missions drive the robots that are not served, in the same run.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import socket
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -24,6 +26,9 @@ __all__ = ["ServeSettings", "serve"]
 logger = logging.getLogger(__name__)
 
 _SERVE_ONLY_KEYS = ("robots", "broker")
+EMBEDDED_VISUALIZATION_CAPACITY = 2000.0
+"""Visualization messages per wall second the embedded broker carries with a subscriber
+(measured: 200 vehicles at 10 Hz keep up, 500 do not; docs/performance.md)."""
 
 
 @dataclass
@@ -88,19 +93,19 @@ def serve(
         password: Broker password.
         on_ready: Called with the started transport once every vehicle is online.
     """
-    from fleet_async.interfaces.broker import EmbeddedBroker
+    from fleet_async.interfaces.broker import DEFAULT_PORT, EmbeddedBroker
 
     broker = None
     url = settings.broker
-    if url is None:
-        broker = EmbeddedBroker()
+    if url is None:  # MQTT's own port when it is free, so masters find it without being told
+        broker = EmbeddedBroker(DEFAULT_PORT if _port_free(DEFAULT_PORT) else 0)
         broker.start()
         url = broker.url
     fleet = FleetInterface(
         sim,
         settings.robots,
         state_period=settings.config.state_period,
-        visualization_period=settings.config.visualization_period,
+        visualization_period=_visualization_period(sim, settings, broker is not None),
         driver="a VDA 5050 master (fleet-async serve)",
     )
     transport = MqttTransport(fleet, settings.config, url, username=username, password=password)
@@ -117,6 +122,33 @@ def serve(
         if broker is not None:
             broker.stop()
     return transport
+
+
+def _visualization_period(sim: Any, settings: ServeSettings, embedded: bool) -> float:
+    """The configured period, made longer (with a warning) where the embedded broker could
+    not carry the fleet's visualization at that rate in real time."""
+    period = settings.config.visualization_period
+    if not embedded or period <= 0:
+        return period
+    served = len(settings.robots) if settings.robots is not None else len(sim.agents)
+    rate = served / period * max(sim.params.target_rtf, 1e-9)  # messages per wall second
+    if rate <= EMBEDDED_VISUALIZATION_CAPACITY:
+        return period
+    slower = served * max(sim.params.target_rtf, 1e-9) / EMBEDDED_VISUALIZATION_CAPACITY
+    logger.warning(
+        "%d vehicles every %g s is %.0f visualization messages a second, more than the "
+        "embedded broker carries (%.0f): every %.2f s instead; --broker (mosquitto) takes the "
+        "full rate",
+        served, period, rate, EMBEDDED_VISUALIZATION_CAPACITY, slower,
+    )  # fmt: skip
+    return slower
+
+
+def _port_free(port: int, host: str = "127.0.0.1") -> bool:
+    """Whether nothing listens on ``host:port``."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.settimeout(0.5)
+        return probe.connect_ex((host, port)) != 0
 
 
 def _drive(sim: Any, duration: float | None) -> None:
