@@ -106,6 +106,7 @@ def main() -> None:
     parser.add_argument("--rtf", type=float, default=1.0)
     parser.add_argument("--broker", default="mqtt://127.0.0.1:1883", help="URL or 'embedded'")
     parser.add_argument("--fraction", type=float, default=0.5, help="vehicles driving orders")
+    parser.add_argument("--visualization-period", type=float, default=0.1, help="s")
     parser.add_argument("--out", help="write the result here (JSON)")
     args = parser.parse_args()
 
@@ -116,7 +117,8 @@ def main() -> None:
     host, port = url.split("://")[1].rsplit(":", 1)
     work = Path(tempfile.mkdtemp(prefix="served_bench_"))
     sim = build(args.n, args.rtf)
-    fleet = FleetInterface(sim, state_period=30.0, visualization_period=0.1)
+    period = args.visualization_period
+    fleet = FleetInterface(sim, state_period=30.0, visualization_period=period)
     transport = MqttTransport(fleet, Vda5050Config(manufacturer=MANUFACTURER), url)
     subscriber = subprocess.Popen(
         [sys.executable, "-c", SUBSCRIBER, host, port, str(work / "sub.json"), MANUFACTURER],
@@ -155,6 +157,7 @@ def main() -> None:
         "wall_seconds": round(run_s, 2),
         "real_time_factor": round(sim.sim_time / run_s, 4),
         "target_rtf": args.rtf,
+        "visualization_period": period,
         "connect_seconds": round(connect_s, 2),
         "states_published": sent["states_sent"],
         "states_received": received["received"]["state"],
