@@ -9,6 +9,7 @@ vehicle publishes OFFLINE. The scenario's missions drive the robots that are not
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -87,6 +88,10 @@ def _settings(sim: Any, path: Path, args: argparse.Namespace) -> Any:
     return settings
 
 
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
 def _messages(exc: BaseException) -> str:
     """The messages of an error, or of each error of an exception group, one per line."""
     inner = getattr(exc, "exceptions", None)
@@ -134,6 +139,8 @@ def _serve(sim: Any, path: Path, args: argparse.Namespace) -> int:
             flush=True,
         )
 
+    # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C: OFFLINE is published.
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
         transport = serve(
             sim,
@@ -150,6 +157,7 @@ def _serve(sim: Any, path: Path, args: argparse.Namespace) -> int:
             raise
         raise CliError(_messages(exc)) from exc  # missions failed: one line per error
     finally:
+        signal.signal(signal.SIGTERM, previous)
         if args.trace:
             sim.stop_trace()
     stats, sent = transport.stats, transport.sent_summary()
