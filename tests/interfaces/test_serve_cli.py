@@ -53,7 +53,7 @@ def test_serve_refuses_a_bad_serve_section(tmp_path: Path) -> None:
     (tmp_path / "scenarios").mkdir()
     scenario = tmp_path / "scenarios" / "bad.yaml"
     scenario.write_text(SCENARIO.read_text().replace("state_period: 10", "state_period: 45"))
-    (tmp_path / "served_fleet.py").symlink_to(REPO / "examples" / "served_fleet.py")
+    (tmp_path / "served_fleet_master.py").symlink_to(REPO / "examples" / "served_fleet_master.py")
     result = subprocess.run(
         [sys.executable, "-m", "fleet_async", "serve", str(scenario), "--duration", "1"],
         capture_output=True, text=True, timeout=TIMEOUT * 4, check=False,

@@ -1,6 +1,6 @@
 """A fleet served over VDA 5050, and a small master that drives it, in one process.
 
-Run:  python examples/served_fleet.py [--max-steps N] [--broker mqtt://host:port]
+Run:  python examples/served_fleet_master.py [--max-steps N] [--broker mqtt://host:port]
 
 The scenario (scenarios/served_fleet.yaml) serves two AMRs as VDA 5050 vehicles; a mission
 drives the shuttle. Without --broker an embedded MQTT broker is started on 127.0.0.1. The
