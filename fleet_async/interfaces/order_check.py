@@ -114,51 +114,62 @@ def _check_task(order: Order, task: Task, where: tuple[str, str]) -> Rejection |
     return None
 
 
+def _check_tasks(
+    order: Order, tasks: tuple[Task, ...], where: tuple[str, str], seen: set[str]
+) -> Rejection | None:
+    """The first problem with a node's or an edge's tasks (``seen``: task ids so far)."""
+    for task in tasks:
+        problem = _check_task(order, task, where)
+        if problem is not None:
+            return problem
+        if task.task_id in seen:
+            return _reject(order, f"task id {task.task_id!r} is used twice", where)
+        seen.add(task.task_id)
+    return None
+
+
+def _check_node(order: Order, node: Node, seen: set[str]) -> Rejection | None:
+    where = ("node_id", node.node_id)
+    if not node.has_position:
+        return _reject(order, f"node {node.node_id!r} has no position", where)
+    values = (node.x, node.y, node.theta, node.deviation_xy, node.deviation_theta)
+    if not all(v is None or math.isfinite(v) for v in values):
+        return _reject(order, f"node {node.node_id!r} has a value that is not finite", where)
+    return _check_tasks(order, node.tasks, where, seen)
+
+
+def _check_edge(order: Order, edge: Edge, differential: bool, seen: set[str]) -> Rejection | None:
+    where = ("edge_id", edge.edge_id)
+    if edge.max_speed is not None and not edge.max_speed > 0:
+        return _reject(
+            order, f"edge {edge.edge_id!r} has max speed {edge.max_speed!r} (expected > 0)", where
+        )
+    if edge.orientation is not None and differential:
+        forward_or_back = min(
+            abs(math.remainder(edge.orientation, 2 * math.pi)),
+            abs(math.remainder(edge.orientation - math.pi, 2 * math.pi)),
+        )
+        if edge.orientation_global or forward_or_back > 1e-3:
+            return _reject(
+                order,
+                f"edge {edge.edge_id!r}: a differential vehicle can only drive forward or "
+                f"backward along an edge (orientation {edge.orientation!r}, "
+                f"{'global' if edge.orientation_global else 'tangential'})",
+                where,
+            )
+    return _check_tasks(order, edge.tasks, where, seen)
+
+
 def _check_contents(order: Order, differential: bool) -> Rejection | None:
     seen: set[str] = set()
     for node in order.nodes:
-        where = ("node_id", node.node_id)
-        if not node.has_position:
-            return _reject(order, f"node {node.node_id!r} has no position", where)
-        values = (node.x, node.y, node.theta, node.deviation_xy, node.deviation_theta)
-        if not all(v is None or math.isfinite(v) for v in values):
-            return _reject(order, f"node {node.node_id!r} has a value that is not finite", where)
-        for task in node.tasks:
-            problem = _check_task(order, task, where)
-            if problem is not None:
-                return problem
-            if task.task_id in seen:
-                return _reject(order, f"task id {task.task_id!r} is used twice", where)
-            seen.add(task.task_id)
+        problem = _check_node(order, node, seen)
+        if problem is not None:
+            return problem
     for edge in order.edges:
-        where = ("edge_id", edge.edge_id)
-        if edge.max_speed is not None and not edge.max_speed > 0:
-            return _reject(
-                order,
-                f"edge {edge.edge_id!r} has max speed {edge.max_speed!r} (expected > 0)",
-                where,
-            )
-        if edge.orientation is not None and differential:
-            tangential = not edge.orientation_global
-            forward_or_back = min(
-                abs(math.remainder(edge.orientation, 2 * math.pi)),
-                abs(math.remainder(edge.orientation - math.pi, 2 * math.pi)),
-            )
-            if not tangential or forward_or_back > 1e-3:
-                return _reject(
-                    order,
-                    f"edge {edge.edge_id!r}: a differential vehicle can only drive forward or "
-                    f"backward along an edge (orientation {edge.orientation!r}, "
-                    f"{'global' if edge.orientation_global else 'tangential'})",
-                    where,
-                )
-        for task in edge.tasks:
-            problem = _check_task(order, task, where)
-            if problem is not None:
-                return problem
-            if task.task_id in seen:
-                return _reject(order, f"task id {task.task_id!r} is used twice", where)
-            seen.add(task.task_id)
+        problem = _check_edge(order, edge, differential, seen)
+        if problem is not None:
+            return problem
     return None
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import threading
 
 import pytest
@@ -334,3 +335,27 @@ def test_robot_names_are_checked(sim):
         FleetInterface(sim, ["ghost"])
     with pytest.raises(ValueError, match=r"state_period.*45"):
         FleetInterface(sim, [], state_period=45)
+
+
+def test_edge_orientation_on_a_differential_robot(sim):
+    agent = robot(sim, "diff", controller="differential")
+    link = InMemoryTransport(FleetInterface(sim, visualization_period=0))
+    link.send("diff", route(points=((0, 0), (2, 0)), orientation=1.0))
+    steps(sim, 1)
+    (error,) = link.latest("diff").errors
+    assert "can only drive forward or backward" in error.description
+    assert ("edge_id", "e0") in error.references
+    # Backward (pi, tangential): it reverses to the node, still facing +x.
+    link.send("diff", route(order_id="back", points=((0, 0), (-2, 0)), orientation=math.pi))
+    steps(sim, 100)
+    pose = agent.get_pose()
+    assert (pose.x, pose.y, pose.yaw) == pytest.approx((-2.0, 0.0, 0.0), abs=1e-6)
+    assert link.latest("diff").errors == ()
+
+
+def test_global_edge_orientation_on_an_omni_robot(served):
+    sim, agent, _, link = served
+    link.send("r0", route(points=((0, 0), (2, 0)), orientation=1.2, orientation_global=True))
+    steps(sim, 100)
+    pose = agent.get_pose()
+    assert (pose.x, pose.y, pose.yaw) == pytest.approx((2.0, 0.0, 1.2), abs=1e-6)
