@@ -28,6 +28,7 @@ import numpy as np
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.steps import steps_for
 from fleet_async.interfaces.commands import Command, command_from_json
+from fleet_async.interfaces.host import ServingHost
 from fleet_async.interfaces.snapshot import VehiclePose, VehicleSnapshot
 from fleet_async.interfaces.vehicle import Vehicle
 
@@ -72,7 +73,7 @@ class FleetInterface:
 
     def __init__(
         self,
-        sim: Any,
+        sim: ServingHost,
         robots: Sequence[str] | None = None,
         *,
         state_period: float = 30.0,
@@ -95,10 +96,10 @@ class FleetInterface:
         self._viz_every = _steps(visualization_period, dt) if visualization_period > 0 else 0
         self.vehicles: dict[str, Vehicle] = {}
         self._reasons: dict[str, list[str]] = defaultdict(list)
-        for agent in self._select(sim, robots):
-            vehicle = Vehicle(agent, sim, deviation_xy, self._change_hook(agent.name))
+        for name, agent in self._select(sim, robots):
+            vehicle = Vehicle(agent, sim, deviation_xy, self._change_hook(name), name=name)
             agent.external_driver = driver
-            self.vehicles[agent.name] = vehicle
+            self.vehicles[name] = vehicle
         self._inbox: deque[tuple[str, Command]] = deque()
         self._lock = threading.Lock()
         self._scheduled: dict[int, list[tuple[str, Command]]] = defaultdict(list)
@@ -107,13 +108,23 @@ class FleetInterface:
         sim.events.on(SimEvents.PRE_STEP, self._on_pre_step)
 
     @staticmethod
-    def _select(sim: Any, robots: Sequence[str] | None) -> list[Any]:
+    def _select(sim: Any, robots: Sequence[str] | None) -> list[tuple[str, Any]]:
+        """``(vehicle name, agent)`` of the served robots: a robot's name, or ``name#id``
+        where several robots share it (``#id`` for a robot without one)."""
         agents = list(sim.agents)
-        if robots is None:
-            return agents
         by_name: dict[str, list[Any]] = defaultdict(list)
         for agent in agents:
-            by_name[agent.name].append(agent)
+            by_name[agent.name or ""].append(agent)
+        if robots is None:
+            return [
+                (
+                    agent.name
+                    if agent.name and len(by_name[agent.name]) == 1
+                    else f"{agent.name or ''}#{agent.object_id}",
+                    agent,
+                )
+                for agent in agents
+            ]
         chosen = []
         for name in robots:
             found = by_name.get(name, [])
@@ -123,7 +134,7 @@ class FleetInterface:
                 raise ValueError(
                     f"FleetInterface.robots: {name!r} names {problem} (robots: {known})"
                 )
-            chosen.append(found[0])
+            chosen.append((name, found[0]))
         return chosen
 
     def _change_hook(self, name: str) -> Any:

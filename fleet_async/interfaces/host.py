@@ -1,6 +1,6 @@
 """What the fleet interface needs of the simulation and of a robot (narrow protocols).
 
-The fleet interface is handed a simulation that satisfies :class:`FleetHost` and robots that
+The fleet interface is handed a simulation that satisfies :class:`ServingHost` and robots that
 satisfy :class:`ServedAgent`; ``MultiRobotSimulationCore`` and ``Agent`` do. Naming only these
 members keeps the interface readable without the simulation's hundred others, and lets a test
 drive it with a small stand-in.
@@ -9,19 +9,18 @@ drive it with a small stand-in.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from fleet_async.core.actions.action import Action
 from fleet_async.core.geometry.pose import Pose
 
-__all__ = ["FleetHost", "ServedAgent"]
+__all__ = ["ServedAgent", "ServingHost"]
 
 
 class ServedAgent(Protocol):
     """The members of a robot a served vehicle uses."""
 
-    name: str
-    object_id: int
+    name: str | None
     external_driver: str | None
     motion_result: bool | None
 
@@ -34,6 +33,10 @@ class ServedAgent(Protocol):
     def get_attached_objects(self) -> Sequence[Any]: ...
     def set_charging(self, charging: bool) -> None: ...
 
+    @property
+    def object_id(self) -> int: ...
+    @property
+    def state_row(self) -> int: ...
     @property
     def is_moving(self) -> bool: ...
     @property
@@ -52,7 +55,7 @@ class ServedAgent(Protocol):
     def battery_plugin(self) -> Any: ...
 
 
-class FleetHost(Protocol):
+class ServingHost(Protocol):
     """The members of a simulation the fleet interface uses."""
 
     @property
@@ -76,3 +79,13 @@ class FleetHost(Protocol):
 
     def add_step_observer(self, observer: Callable[[int], None]) -> None: ...
     def remove_step_observer(self, observer: Callable[[int], None]) -> bool: ...
+
+
+if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.simulation import MultiRobotSimulationCore
+
+    def _the_real_classes_satisfy_the_protocols(
+        sim: MultiRobotSimulationCore, agent: Agent
+    ) -> tuple[ServingHost, ServedAgent]:
+        return sim, agent  # mypy checks the simulation and Agent against both protocols

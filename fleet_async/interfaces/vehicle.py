@@ -35,6 +35,7 @@ from fleet_async.interfaces.commands import (
     Task,
 )
 from fleet_async.interfaces.driving import Drive, plan_drive
+from fleet_async.interfaces.host import ServedAgent, ServingHost
 from fleet_async.interfaces.loads import load_action, loads_of
 from fleet_async.interfaces.order_check import check_order
 from fleet_async.interfaces.snapshot import (
@@ -75,17 +76,19 @@ class Vehicle:
             say (also how close the first node of a new order must be).
         on_change: Called with a reason (``"order_accepted"``, ``"node_reached"`` ...) each
             time the state changes in a way the master must hear of.
+        name: The vehicle's name (default: the robot's).
     """
 
     def __init__(
         self,
-        agent: Any,
-        host: Any,
+        agent: ServedAgent,
+        host: ServingHost,
         default_deviation_xy: float = 0.5,
         on_change: Callable[[str], None] | None = None,
+        name: str | None = None,
     ) -> None:
         self.agent = agent
-        self.name: str = agent.name
+        self.name: str = name or agent.name or f"#{agent.object_id}"
         self._host = host
         self._default_deviation = float(default_deviation_xy)
         self._notify = on_change if on_change is not None else (lambda reason: None)

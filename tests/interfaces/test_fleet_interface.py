@@ -335,6 +335,9 @@ def test_robot_names_are_checked(sim):
         FleetInterface(sim, ["ghost"])
     with pytest.raises(ValueError, match=r"state_period.*45"):
         FleetInterface(sim, [], state_period=45)
+    # Serving every robot, a shared name is told apart by the robot's id, as the viewer does.
+    ids = [a.object_id for a in sim.agents]
+    assert list(FleetInterface(sim).vehicles) == [f"twin#{i}" for i in ids]
 
 
 def test_edge_orientation_on_a_differential_robot(sim):
