@@ -2,8 +2,9 @@
 
 Sub-packages of the core import only downward at run time: an import inside a function counts
 as much as one at the top of a module. Imports under ``if TYPE_CHECKING:`` point downward too,
-but for the pairs in ``TYPE_ONLY_UPWARD``: a lower floor annotates with a protocol of its own
-(``world/host.py``, ``collision/host.py``, ...) that the class above satisfies.
+but for the pairs in ``TYPE_ONLY_UPWARD`` (none today): a lower floor annotates with a protocol
+of its own (``world/host.py``, ``collision/host.py``, ``missions/host.py``, ...) that the class
+above satisfies.
 Sub-packages on one floor (``metrics`` and ``checkpoint``; ``scenario`` and ``view``) do not
 import each other. Above the layers stand the public simulation class (``core/simulation.py``),
 then ``fleet_async.core`` itself; the seed-module facades (``fleet_async.agent``, ...) stand
@@ -59,17 +60,13 @@ FACADES = (
 )
 """``fleet_async.<module>`` for each module of the reference API (seed-module facades)."""
 
-TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset(
-    {
-        # The mission seam re-exports, for annotations only, what fleet_async.tasks (which may
-        # import nothing else of the core) annotates with: the simulation class (tasks/run.py,
-        # tasks/runtime.py) and the devices (tasks/devices.py). Not yet narrowed to protocols
-        # of the seam (issue 32): each would list what the mission layer uses of them.
-        ("fleet_async.core.missions", "fleet_async.core.devices"),
-        ("fleet_async.core.missions", "fleet_async.core.simulation"),
-    }
-)
-"""(module, imported module) pairs whose type-only import may point up a floor."""
+TYPE_ONLY_UPWARD: frozenset[tuple[str, str]] = frozenset()
+"""(module, imported module) pairs whose type-only import may point up a floor.
+
+Empty: every floor annotates with protocols of its own (``*/host.py``). A pair belongs here only
+where a floor must name a class above it in an annotation and a protocol of its own would not
+do; a comment beside the pair says why, and a test fails once the import is gone, so the list
+never outlives its reasons."""
 
 MISSION_SEAM = "fleet_async.core.missions"
 MAX_MODULES_PER_FOLDER = 15

@@ -32,7 +32,7 @@ from fleet_async.tasks.resources import Resource
 from fleet_async.tasks.waits import action_error
 
 if TYPE_CHECKING:
-    from fleet_async.core.missions import Door, Elevator
+    from fleet_async.core.missions import MissionDevice, MissionDoor, MissionElevator
 
 __all__ = ["device_resource", "pass_through", "ride"]
 
@@ -42,7 +42,7 @@ _RESOURCES: weakref.WeakKeyDictionary[Any, Resource] = weakref.WeakKeyDictionary
 _CLOSING: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
 
 
-def device_resource(device: Any) -> Resource:
+def device_resource(device: MissionDevice) -> Resource:
     """The Resource (capacity 1) missions share ``device`` through: a lift's cabin, a door's
     doorway. Created on first use; the same object for the device's lifetime.
 
@@ -59,7 +59,7 @@ def device_resource(device: Any) -> Resource:
 
 
 async def ride(
-    elevator: Elevator,
+    elevator: MissionElevator,
     robot: Any,
     floor: str,
     *,
@@ -116,7 +116,7 @@ async def ride(
         return await robot.move(goal)
 
 
-def _abandoned(elevator: Elevator, robot: Any, floor: str) -> None:
+def _abandoned(elevator: MissionElevator, robot: Any, floor: str) -> None:
     name = robot.name or repr(robot)
     logger.warning(
         "a mission stopped while %s rode %s: the lift finishes its trip to %r and %s stays on "
@@ -134,7 +134,7 @@ def _abandoned(elevator: Elevator, robot: Any, floor: str) -> None:
 
 
 async def pass_through(
-    door: Door,
+    door: MissionDoor,
     robot: Any,
     path: Any,
     *,

@@ -33,7 +33,7 @@ if sys.version_info < (3, 11):  # pragma: no cover  # anyio brings the backport
     from exceptiongroup import BaseExceptionGroup
 
 if TYPE_CHECKING:
-    from fleet_async.core.missions import MultiRobotSimulationCore
+    from fleet_async.core.missions import MissionSim
     from fleet_async.tasks.missions import Mission
 
 __all__ = ["run", "run_async"]
@@ -56,7 +56,7 @@ _WARN_AFTER = 1.0
 
 
 def run(
-    sim: MultiRobotSimulationCore,
+    sim: MissionSim,
     main: Callable[..., Awaitable[Any]],
     *args: Any,
     until: float | None = None,
@@ -110,7 +110,7 @@ def run(
 
 
 async def _run_with_kwargs(
-    sim: MultiRobotSimulationCore,
+    sim: MissionSim,
     main: Callable[..., Awaitable[Any]],
     args: tuple[Any, ...],
     until: float | None,
@@ -120,7 +120,7 @@ async def _run_with_kwargs(
 
 
 async def run_async(
-    sim: MultiRobotSimulationCore,
+    sim: MissionSim,
     main: Callable[..., Awaitable[Any]],
     *args: Any,
     until: float | None = None,

@@ -24,7 +24,7 @@ from fleet_async.tasks.sync import Event, EventStream
 from fleet_async.tasks.waits import ActionWait, BusWait, PredicateWait
 
 if TYPE_CHECKING:
-    from fleet_async.core.missions import MultiRobotSimulationCore
+    from fleet_async.core.missions import MissionSim
 
 __all__ = ["Runtime"]
 
@@ -36,7 +36,7 @@ class Runtime:
         sim: The simulation; its step count is the kernel's clock.
     """
 
-    def __init__(self, sim: MultiRobotSimulationCore) -> None:
+    def __init__(self, sim: MissionSim) -> None:
         self.sim = sim
         self.kernel = Kernel(sim.step_count, sim.params.timestep)
         self.root = Nursery(self.kernel, CancelScope(self.kernel, root=True), owner=None)

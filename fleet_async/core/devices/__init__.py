@@ -14,6 +14,8 @@ May import ``managers`` and below at run time.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.devices.device import Device
 from fleet_async.core.devices.door import Door, DoorAction, DoorParams, DoorType
@@ -34,6 +36,9 @@ from fleet_async.core.devices.workcell import (
 )
 from fleet_async.core.devices.workcell_plugin import WorkcellPlugin
 from fleet_async.core.managers.sim_object_manager import register_entity_class
+
+if TYPE_CHECKING:
+    from fleet_async.core.missions.host import MissionDoor, MissionElevator
 
 __all__ = [
     "Device",
@@ -60,3 +65,9 @@ __all__ = [
 
 for _cls in (Door, Elevator, Workcell):
     register_entity_class(_cls.device_type, _cls)
+
+if TYPE_CHECKING:
+    # The mission layer names a door and a lift by the seam's protocols (``tasks/devices.py``):
+    # the type checker holds the classes to them here, where both are in view.
+    _door_for_missions: type[MissionDoor] = Door
+    _lift_for_missions: type[MissionElevator] = Elevator

@@ -10,19 +10,19 @@
 - ``AgentMissionApi`` (``agent_missions.py``): ``await agent.move(...)`` and the other agent
   commands, each queueing an Action and returning the runtime's event for it;
 - what the runtime reads back: ``SimEvents``, ``ActionStatus``, ``Action``, ``MoveAction``,
-  ``WaitAction``, and (for annotations only) ``MultiRobotSimulationCore``;
+  ``WaitAction``;
+- what the mission layer uses of the objects above this floor, as protocols (``host.py``):
+  ``MissionSim`` (the simulation ``fleet_async.run`` drives), ``MissionDoor`` and
+  ``MissionElevator`` (what the device missions call); the classes above satisfy them;
 - device composites (``hooks.py``): ``register_mission_hook`` lets ``fleet_async.tasks.devices``
   implement ``elevator.ride`` and ``door.pass_through``, which need the mission layer's own
-  primitives; ``DeviceEvents`` names what devices emit, and ``Door``, ``Elevator``,
-  ``Workcell`` are named for annotations only;
+  primitives; ``DeviceEvents`` names what devices emit;
 - ``steps_for``: the package's one rule for sim seconds to whole steps (``core/base/steps.py``).
 
-May import ``actions`` and below at run time.
+May import ``actions`` and below, at run time and for annotations alike.
 """
 
 from __future__ import annotations
-
-from typing import TYPE_CHECKING
 
 from fleet_async.core.actions.action import Action, MoveAction, WaitAction
 from fleet_async.core.base.device_events import DeviceEvents
@@ -36,16 +36,8 @@ from fleet_async.core.missions.errors import (
     NoMissionRuntimeError,
 )
 from fleet_async.core.missions.hooks import mission_hook, register_mission_hook
+from fleet_async.core.missions.host import MissionDevice, MissionDoor, MissionElevator, MissionSim
 from fleet_async.core.missions.mission_api import MissionRuntime, SimEventBus, SimMissionApi
-
-if TYPE_CHECKING:
-    # Devices stand above this layer: for annotations only.
-    from fleet_async.core.devices import Door as Door
-    from fleet_async.core.devices import Elevator as Elevator
-    from fleet_async.core.devices import Workcell as Workcell
-
-    # The simulation class stands above this layer: for annotations only.
-    from fleet_async.core.simulation import MultiRobotSimulationCore as MultiRobotSimulationCore
 
 __all__ = [
     "Action",
@@ -53,8 +45,12 @@ __all__ = [
     "AgentMissionApi",
     "DeviceEvents",
     "ExternallyDrivenError",
+    "MissionDevice",
+    "MissionDoor",
+    "MissionElevator",
     "MissionError",
     "MissionRuntime",
+    "MissionSim",
     "MoveAction",
     "NoMissionRuntimeError",
     "SimEventBus",
