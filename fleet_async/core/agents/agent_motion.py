@@ -73,14 +73,14 @@ def _waypoints(path: Any) -> list[Pose]:
     return waypoints
 
 
-def _finite_command(**command: Any) -> tuple[float, ...]:
-    for name, value in command.items():
+def _finite_command(vx: Any, vy: Any, vz: Any, wz: Any) -> tuple[float, float, float, float]:
+    for name, value in (("vx", vx), ("vy", vy), ("vz", vz), ("wz", wz)):
         if not (_is_real(value) and math.isfinite(value)):
             raise ValueError(
                 f"set_cmd_vel.{name}: expected a finite number (m/s or rad/s), got "
                 f"{short_repr(value)}"
             )
-    return tuple(float(v) for v in command.values())
+    return float(vx), float(vy), float(vz), float(wz)
 
 
 def _is_real(value: Any) -> bool:
@@ -347,7 +347,7 @@ class AgentMotionApi:
             ValueError: for a value that is not a finite number (naming it), or a sideways
                 command (``vy``) on a differential robot.
         """
-        command = _finite_command(vx=vx, vy=vy, vz=vz, wz=wz)
+        command = _finite_command(vx, vy, vz, wz)
         base = self._base("set_cmd_vel")
         if base is None:
             return
