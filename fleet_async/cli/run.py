@@ -226,7 +226,7 @@ def load_scenario(
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
     """
-    config = load_yaml_config(path)
+    config = load_yaml_config(path, allow_empty=False)
     if drop_trace and isinstance(config, dict):
         config.pop("trace", None)
     if any(key in SCENARIO_SECTIONS for key in config):

@@ -97,7 +97,8 @@ class YamlScenario(Scenario):
     def from_file(cls, path: str | Path) -> YamlScenario:
         """Load a scenario YAML file."""
         path = Path(path)
-        return cls(load_yaml_config(path), str(path), str(path.resolve().parent))
+        config = load_yaml_config(path, allow_empty=False)
+        return cls(config, str(path), str(path.resolve().parent))
 
     def settable_keys(self) -> list[str]:
         """Dotted paths into the scenario (see :mod:`fleet_async.sweep.overrides`)."""

@@ -44,19 +44,21 @@ _YAML_TYPES = (type(None), bool, int, float, str, list, tuple, dict)
 _SCALARS = {bool: (bool,), int: (int,), float: (int, float), str: (str,)}
 
 
-def load_yaml_config(config_path: PathLike) -> dict[str, Any]:
+def load_yaml_config(config_path: PathLike, *, allow_empty: bool = True) -> dict[str, Any]:
     """Load a YAML file whose top level is a mapping.
 
     Args:
         config_path: Path of the YAML file.
+        allow_empty: Whether an empty file (or one of comments only) is ``{}``; scenario
+            loaders pass False, since an empty scenario is a mistake (a wrong or truncated file).
 
     Returns:
-        The parsed mapping; ``{}`` for an empty file.
+        The parsed mapping; ``{}`` for an empty file when ``allow_empty``.
 
     Raises:
         FileNotFoundError: If ``config_path`` is not a file (the message gives the absolute path).
-        ValueError: If the YAML is malformed (naming the file, line and column) or its top level
-            is not a mapping (naming the file).
+        ValueError: If the YAML is malformed (naming the file, line and column), its top level
+            is not a mapping (naming the file), or it is empty and ``allow_empty`` is False.
     """
     path = Path(config_path)
     if not path.is_file():
@@ -69,6 +71,11 @@ def load_yaml_config(config_path: PathLike) -> dict[str, Any]:
         problem = getattr(exc, "problem", None) or str(exc)
         where = f"{path}, line {mark.line + 1}, column {mark.column + 1}" if mark else str(path)
         raise ValueError(f"{where}: invalid YAML: {problem}") from exc
+    if data is None and not allow_empty:
+        raise ValueError(
+            f"{path}: the file is empty (no YAML mapping); a scenario needs at least one "
+            "section, e.g. 'simulation:' or 'entities:'"
+        )
     if data is None:
         return {}
     if not isinstance(data, dict):
