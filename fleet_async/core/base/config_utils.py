@@ -177,6 +177,7 @@ def dataclass_from_dict(
     strict_keys: Sequence[str] | None = None,
     source: PathLike | None = None,
     section: str | None = None,
+    extra_keys: Sequence[str] = (),
 ) -> T:
     """Construct a dataclass from a config mapping by field introspection.
 
@@ -198,6 +199,8 @@ def dataclass_from_dict(
             and other keys in ``config`` are ignored (not errors) in this mode.
         source: File the config came from, named in error messages.
         section: Name of the config section, used in messages instead of ``cls.__name__``.
+        extra_keys: Keys the caller reads itself (e.g. ``pose`` and ``yaw``), named among the
+            valid keys when an unknown key is reported.
 
     Returns:
         An instance of ``cls``.
@@ -222,7 +225,8 @@ def dataclass_from_dict(
         raise ValueError(f"{label}: {bad_names[0]!r} is not a field of {cls.__name__}")
     key_of = {name: aliases.get(name, name) for name in selected}
     if strict_keys is None:
-        _reject_unknown_keys(config, set(key_of.values()) | set(key_of), where, label)
+        known = set(key_of.values()) | set(key_of) | set(extra_keys)
+        _reject_unknown_keys(config, known, where, label)
     hints = _type_hints(cls)
     kwargs: dict[str, Any] = {}
     for name, field in init_fields.items():
