@@ -362,7 +362,7 @@ def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | No
 
 
 def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
-    kpis = sim.kpis()
+    kpis = sim.kpis(from_now=True)
     if args.camera:
         _set_camera(sim, args.camera)
     if args.record:
