@@ -164,6 +164,11 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         self._row = self.object_id = -1
         self.sim_core = None
 
+    @property
+    def is_removed(self) -> bool:
+        """Whether the object has left the simulation it belonged to."""
+        return self._removed is not None
+
     def check_not_removed(self, what: str) -> None:
         """Raise ObjectRemovedError (naming the object and ``what``) if it left its sim."""
         if self._removed is not None:
