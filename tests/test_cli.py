@@ -328,6 +328,14 @@ def test_run_missing_file_is_an_error(script, tmp_path):
     assert str(tmp_path / "nope.yaml") in error_line(result.stderr)
 
 
+@pytest.mark.parametrize("text", ["", "# nothing but a comment\n"])
+def test_run_of_an_empty_scenario_file_is_an_error(tmp_path, text):
+    path = tmp_path / "empty.yaml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))}: the file is empty"):
+        load_scenario(path, gui_on=False, rtf=0)
+
+
 def test_run_without_a_duration_runs_until_the_actions_are_done(script, tmp_path):
     path = tmp_path / "until_done.yaml"
     path.write_text(SCENARIO.replace("  duration: 10.0\n", ""))

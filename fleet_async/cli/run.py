@@ -226,7 +226,7 @@ def load_scenario(
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
     """
-    config = load_yaml_config(path)
+    config = load_yaml_config(path, allow_empty=False)
     if drop_trace and isinstance(config, dict):
         config.pop("trace", None)
     if any(key in SCENARIO_SECTIONS for key in config):
@@ -362,7 +362,7 @@ def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | No
 
 
 def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> int:
-    kpis = sim.kpis()
+    kpis = sim.kpis(from_now=True)
     if args.camera:
         _set_camera(sim, args.camera)
     if args.record:

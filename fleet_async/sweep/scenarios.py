@@ -97,7 +97,8 @@ class YamlScenario(Scenario):
     def from_file(cls, path: str | Path) -> YamlScenario:
         """Load a scenario YAML file."""
         path = Path(path)
-        return cls(load_yaml_config(path), str(path), str(path.resolve().parent))
+        config = load_yaml_config(path, allow_empty=False)
+        return cls(config, str(path), str(path.resolve().parent))
 
     def settable_keys(self) -> list[str]:
         """Dotted paths into the scenario (see :mod:`fleet_async.sweep.overrides`)."""
@@ -312,7 +313,7 @@ def describe_error(error: BaseException) -> str:
 
 
 def _run_missions(sim: MultiRobotSimulationCore, main: Mission, duration: float) -> None:
-    kpis = sim.kpis()
+    kpis = sim.kpis(from_now=True)
     if duration <= 0:
         run_missions(sim, main)
         return
@@ -326,7 +327,7 @@ def _run_missions(sim: MultiRobotSimulationCore, main: Mission, duration: float)
 def _run_scenario(sim: MultiRobotSimulationCore, duration: float | None) -> None:
     """The scenario's own work, as ``fleet-async run`` runs it: its ``missions:`` and queued
     actions, for the duration or until done (at most ``DEFAULT_MAX_DURATION``)."""
-    kpis = sim.kpis()
+    kpis = sim.kpis(from_now=True)
     if duration is None and sim.params.duration > 0:
         duration = float(sim.params.duration)
     limit = duration if duration is not None else DEFAULT_MAX_DURATION
@@ -337,7 +338,7 @@ def _run_scenario(sim: MultiRobotSimulationCore, duration: float | None) -> None
 def _run_built(
     sim: MultiRobotSimulationCore, main: Mission | None, spec: RunSpec
 ) -> tuple[dict[str, Any], list[dict[str, Any]] | None]:
-    kpis = sim.kpis()
+    kpis = sim.kpis(from_now=True)
     if main is not None:
         duration = spec.duration if spec.duration is not None else sim.params.duration
         _run_missions(sim, main, duration)

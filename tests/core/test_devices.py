@@ -401,3 +401,10 @@ def test_an_unreadable_rmf_door_is_a_named_load_failure(sim, tmp_path):
     ):
         sim.load_world({"world_file": str(world)})
     assert sim.sim_objects == []
+
+
+def test_door_params_name_pose_and_yaw_among_the_valid_keys():
+    with pytest.raises(
+        ValueError, match=r"'pos' \(did you mean 'pose'\?\); valid keys: .*\bpose\b.*\byaw\b"
+    ):
+        DoorParams.from_dict({"pos": [0, 0, 0]}, source="doors.yaml")

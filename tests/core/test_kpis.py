@@ -189,7 +189,7 @@ def test_counts_start_when_asked_and_stop_freezes(sim):
     r = robot(sim)
     r.add_action(MoveAction(path=Pose.from_xyz(2.0, 0.0, 0.1)))
     steps(sim, 10)
-    kpis = sim.kpis()
+    kpis = sim.kpis(from_now=True)
     assert sim.kpis() is kpis
     steps(sim, 20)
     kpis.stop()
@@ -336,3 +336,14 @@ def test_devices_are_agents_but_not_robots(sim):
     row = kpis.summary()
     assert row.robot_count == 1 and [d.robot for d in kpis.per_robot()] == ["r0"]
     assert (row.actions_completed, row.waiting_time_total_s) == (1, 10 * DT)
+
+
+def test_a_first_call_after_a_run_is_an_error_not_a_row_of_zeros(sim):
+    r = robot(sim, name="r0")
+    r.add_action(MoveAction(path=Pose.from_xyz(1.0, 0.0, 0.1)))
+    steps(sim, 20)
+    with pytest.raises(RuntimeError, match=r"first called after 20 steps \(2 s of sim time\)"):
+        sim.kpis()
+    kpis = sim.kpis(from_now=True)  # counting from here on is asked for
+    steps(sim, 5)
+    assert kpis.summary().steps == 5 and sim.kpis() is kpis

@@ -167,6 +167,30 @@ def test_grid_validation_names_field_and_value(kwargs, match):
         GridSpawnParams(**values)
 
 
+@pytest.mark.parametrize(
+    ("spacing", "match"),
+    [
+        ([0, 1], r"x spacing > 0 .*2 cell.*\[0\.0, 1\.0, 0\.0\]"),
+        ([1, -2], r"y spacing > 0 .*\[1\.0, -2\.0, 0\.0\]"),
+        ([1, 1, -1], r"z spacing >= 0 .*1 cell"),
+    ],
+)
+def test_grid_refuses_a_zero_or_negative_spacing(spacing, match):
+    with pytest.raises(ValueError, match=match):
+        GridSpawnParams(0, 1, 0, 1, spacing=spacing, offset=[0, 0])
+
+
+def test_count_grid_refuses_a_zero_spacing_naming_the_file():
+    with pytest.raises(
+        ValueError, match=r"^fleet\.yaml: grid: GridSpawnParams\.spacing.*x spacing"
+    ):
+        GridSpawnParams.from_dict({"count": 4, "spacing": [0, 0]}, source="fleet.yaml")
+
+
+def test_grid_takes_a_zero_spacing_on_an_axis_of_one_cell():
+    assert GridSpawnParams(0, 0, 0, 2, spacing=[0, 1], offset=[0, 0]).spacing == [0.0, 1.0, 0.0]
+
+
 # ----- grid spawning ------------------------------------------------------------------------
 
 

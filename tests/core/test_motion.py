@@ -228,12 +228,44 @@ def test_fixed_base_ignores_motion_with_a_warning(sim, caplog):
 
 def test_bad_paths_are_rejected(sim):
     agent = spawn(sim, "omni")
-    with pytest.raises(ValueError, match="waypoint 1"):
+    with pytest.raises(ValueError, match=r"set_path\.path\[1\]: expected a Pose, got \[2, 0, 0\]"):
         agent.set_path([Pose.from_xyz(1, 0, 0), [2, 0, 0]])
     with pytest.raises(ValueError, match="Pose"):
         agent.set_goal_pose([1, 2, 3])
     with pytest.raises(ValueError, match="direction"):
         agent.set_path([Pose.from_xyz(1, 0, 0)], direction="sideways")
+
+
+@pytest.mark.parametrize("path", [Path([]), []])
+def test_an_empty_path_is_refused(sim, path):
+    agent = spawn(sim, "omni")
+    with pytest.raises(ValueError, match=r"set_path\.path: expected at least one waypoint"):
+        agent.set_path(path)
+    assert agent.motion_result is None
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda a: a.set_goal_pose((3, 0, 0)),
+        lambda a: a.set_path((3, 0, 0)),
+        lambda a: MoveAction(path=(3, 0, 0)),
+    ],
+)
+def test_a_tuple_goal_is_reported_as_what_it_is(sim, call):
+    agent = spawn(sim, "omni")
+    with pytest.raises(ValueError, match=r"got \(3, 0, 0\) .*Pose\.from_xyz\(x, y, z\)"):
+        call(agent)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+@pytest.mark.parametrize("name", ["vx", "vy", "wz", "vz"])
+def test_cmd_vel_refuses_nan_and_infinities(sim, name, bad):
+    agent = spawn(sim, "omni")
+    with pytest.raises(ValueError, match=rf"set_cmd_vel\.{name}: expected a finite number.*{bad}"):
+        agent.set_cmd_vel(**{name: bad})
+    sim.step_once()
+    assert np.isfinite(agent.get_pose().position).all() and not agent.is_moving
 
 
 def test_many_agents_move_independently_in_one_pass(sim):

@@ -1,5 +1,8 @@
 from __future__ import annotations
 
+import math
+import re
+
 import pytest
 
 from fleet_async import CollisionDetectionMethod, SimulationParams, SpatialHashCellSizeMode
@@ -50,11 +53,26 @@ def test_collision_method_resolves_from_physics():
         ("collision_margin", -0.01, "collision_margin"),
         ("gui", "yes", "gui.*yes"),
         ("model_paths", "not-a-list", "model_paths"),
+        (
+            "duration",
+            -5,
+            r"duration: expected a finite number >= 0 \(0: run until .*got -5",
+        ),
+        ("duration", math.inf, r"duration.*inf"),
     ],
 )
 def test_bad_values_name_field_and_value(field, value, match):
     with pytest.raises(ValueError, match=match):
         SimulationParams(**{field: value})
+
+
+def test_a_negative_duration_in_a_file_is_refused_naming_the_file(tmp_path):
+    path = tmp_path / "scenario.yaml"
+    path.write_text("simulation:\n  duration: -5\n")
+    with pytest.raises(
+        ValueError, match=rf"^{re.escape(str(path))}: SimulationParams\.duration.*-5"
+    ):
+        SimulationParams.from_config(str(path))
 
 
 def test_from_dict_converts_enums_and_rejects_unknown_keys():

@@ -701,3 +701,10 @@ def test_object_managers_have_unique_names(sim):
         AgentManager(sim, name="crates")
     with pytest.raises(ValueError, match=r"SimObjectManager\.name: expected a string"):
         SimObjectManager(sim, name=3)
+
+
+def test_an_empty_scenario_file_is_refused_naming_it(tmp_path):
+    path = tmp_path / "empty.yaml"
+    path.write_text("\n")
+    with pytest.raises(ValueError, match=r"empty.yaml: the file is empty .*'simulation:'"):
+        MultiRobotSimulationCore.from_yaml(path)

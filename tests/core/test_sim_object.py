@@ -271,15 +271,31 @@ def test_keep_world_pose_and_link_attachment(sim, caplog):
 
 
 @pytest.mark.parametrize(
-    "case", ["self", "duplicate", "other_parent", "cycle", "both_poses", "joint_type"]
+    ("case", "standalone"),
+    [("duplicate", False), ("other_parent", False), ("not_pickable", False), ("duplicate", True)],
 )
+def test_attach_returns_false_with_a_warning_like_the_seed(sim, caplog, case, standalone):
+    owner = None if standalone else sim
+    a, b, c = box(owner), box(owner), box(owner)
+    fixed = box(owner, pickable=False)
+    a.attach_object(b)
+    parent, child, match = {
+        "duplicate": (a, b, "already attached to this object"),
+        "other_parent": (c, b, "already attached to SimObject"),
+        "not_pickable": (a, fixed, "is not pickable"),
+    }[case]
+    with caplog.at_level(logging.WARNING):
+        assert parent.attach_object(child) is False
+    assert match in caplog.text
+    assert a.get_attached_objects() == [b] and not c.is_attached() and not fixed.is_attached()
+
+
+@pytest.mark.parametrize("case", ["self", "cycle", "both_poses", "joint_type"])
 def test_bad_attach_raises_and_keeps_state(sim, case):
     a, b, c = box(sim), box(sim), box(sim)
     a.attach_object(b)
     args = {
         "self": (a, a, {}, "itself"),
-        "duplicate": (a, b, {}, "already attached to this object"),
-        "other_parent": (c, b, {}, "already attached to SimObject"),
         "cycle": (b, a, {}, "cycle"),
         "both_poses": (
             a,

@@ -70,8 +70,15 @@ def test_empty_path_is_allowed():
 
 
 def test_non_pose_waypoint_raises_naming_index():
-    with pytest.raises(TypeError, match=r"^Path\.waypoints\[1\]: expected Pose, got \[1, 0, 0\]$"):
+    with pytest.raises(
+        TypeError, match=r"^Path\.waypoints\[1\]: expected a Pose, got \[1, 0, 0\] \(list\) in \["
+    ):
         Path([Pose.from_xyz(0, 0, 0), [1, 0, 0]])
+
+
+def test_numbers_as_waypoints_are_named_as_numbers():
+    with pytest.raises(TypeError, match=r"got \(3, 0, 0\) \(numbers: .*Pose\.from_xyz"):
+        Path((3, 0, 0))
 
 
 @pytest.mark.parametrize("bad", [Pose.from_xyz(0, 0, 0), 5, None])

@@ -522,3 +522,7 @@ def test_loaded_geometry_stays_put_and_holds_up_a_dynamic_box_under_physics():
         }
         # came to rest on station_1's top (0.75 m) instead of falling through
         assert np.allclose(crate.get_pose().position, [5.0, 17.0, 0.85], atol=0.01)
+
+
+def test_an_empty_world_config_loads_nothing(sim):
+    assert sim.load_world({}) == [] and sim.sim_objects == []

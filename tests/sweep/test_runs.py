@@ -184,3 +184,10 @@ def test_runs_branch_from_a_checkpoint(tmp_path):
     assert wrong.error.startswith(
         "CheckpointError: restore_state: this simulation has other objects"
     )
+
+
+def test_an_empty_scenario_file_is_refused_naming_it(tmp_path):
+    path = tmp_path / "empty.yaml"
+    path.write_text("")
+    with pytest.raises(ValueError, match=r"empty.yaml: the file is empty"):
+        YamlScenario.from_file(path)

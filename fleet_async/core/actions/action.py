@@ -17,11 +17,13 @@ protocol), every built-in action keeps its own ``status``, ``start_time`` and ``
 from __future__ import annotations
 
 import logging
+import numbers
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import ActionStatus, MovementDirection, coerce_enum
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
@@ -187,7 +189,16 @@ def _as_path(path: Any) -> Path:
         return Path([path])
     if isinstance(path, (list, tuple)) and all(isinstance(p, Pose) for p in path):
         return Path(list(path))
-    raise ValueError(f"MoveAction.path: expected a Path, a Pose or a list of Poses, got {path!r}")
+    of_numbers = isinstance(path, (list, tuple)) and path and all(map(_is_number, path))
+    hint = " (numbers: for a position give Pose.from_xyz(x, y, z))" if of_numbers else ""
+    raise ValueError(
+        f"MoveAction.path: expected a Path, a Pose or a list of Poses, got {short_repr(path)} "
+        f"({type(path).__name__}){hint}"
+    )
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 @dataclass(eq=False)

@@ -8,6 +8,8 @@ step in which its joints came within tolerance.
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -20,6 +22,7 @@ from fleet_async.core.actions.action import (
     TrackedAction,
     WaitHint,
 )
+from fleet_async.core.base.reprs import short_repr
 
 if TYPE_CHECKING:
     from fleet_async.core.actions.host import ActingAgent
@@ -44,6 +47,11 @@ class _ArmAction(TrackedAction):
     def on_cancel(self, agent: ActingAgent) -> None:
         """Cancelled while running: the joints stop where they are."""
         agent.stop_joints()
+
+
+def _is_finite(value: Any) -> bool:
+    real = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    return real and math.isfinite(value)
 
 
 @dataclass(eq=False)
@@ -71,6 +79,12 @@ class JointAction(_ArmAction):
             )
         if not len(targets):
             raise ValueError("JointAction.target_joint_positions: expected at least one target")
+        values = targets.values() if isinstance(targets, Mapping) else targets
+        if not all(_is_finite(v) for v in values):
+            raise ValueError(
+                "JointAction.target_joint_positions: expected finite numbers (rad or m), got "
+                f"{short_repr(targets)}"
+            )
         _check_force("JointAction", self.max_force)
 
     def step(self, agent: ActingAgent, dt: float) -> bool:

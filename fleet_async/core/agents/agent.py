@@ -30,7 +30,7 @@ from fleet_async.core.missions.agent_missions import AgentMissionApi
 from fleet_async.core.motion.chain import build_controller_chain
 from fleet_async.core.motion.controllers import Controller
 from fleet_async.core.motion.ik import IKParams
-from fleet_async.core.motion.joints import JointSet
+from fleet_async.core.motion.joints import JointSet, check_tolerance_spec
 from fleet_async.core.world.link_colours import one_colour_per_link
 
 if TYPE_CHECKING:
@@ -117,6 +117,7 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         self.urdf_path = urdf_path
         self.use_fixed_base = bool(use_fixed_base)
         self._ik_params = ik_params  # the defaults are made on first use (most agents: never)
+        check_tolerance_spec(joint_tolerance, "Agent.joint_tolerance")
         self._joint_tolerance = joint_tolerance
         self._joint_set: JointSet | None = None
         self.path_visualize = False

@@ -20,7 +20,13 @@ import numpy as np
 
 from fleet_async.core.actions.action import DEFAULT_EE_TOLERANCE, DEFAULT_MAX_FORCE
 from fleet_async.core.motion.ik import IKParams, detect_end_effector, orientation_error, solve_ik
-from fleet_async.core.motion.joints import JointSet, JointTargets, ToleranceSpec, read_joint_infos
+from fleet_async.core.motion.joints import (
+    JointSet,
+    JointTargets,
+    ToleranceSpec,
+    check_tolerance_spec,
+    read_joint_infos,
+)
 from fleet_async.core.world.links import link_index
 
 if TYPE_CHECKING:
@@ -111,6 +117,7 @@ class AgentJointsApi:
 
     @joint_tolerance.setter
     def joint_tolerance(self, value: ToleranceSpec) -> None:
+        check_tolerance_spec(value, "joint_tolerance")
         self._joint_tolerance = value
 
     def resolve_joint_tolerance(self, tolerance: ToleranceSpec, joint: int | str) -> float:

@@ -10,12 +10,15 @@ and stops go through the base controller.
 from __future__ import annotations
 
 import logging
+import math
+import numbers
 import warnings
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import MotionMode, MovementDirection, coerce_enum
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
@@ -42,15 +45,47 @@ logger = logging.getLogger(__name__)
 
 def _waypoints(path: Any) -> list[Pose]:
     if isinstance(path, Path):
-        return list(path.waypoints)
-    if isinstance(path, Pose):
-        return [path]
-    if isinstance(path, (list, tuple)):
+        waypoints = list(path.waypoints)
+    elif isinstance(path, Pose):
+        waypoints = [path]
+    elif isinstance(path, (list, tuple)):
+        if path and all(_is_real(v) for v in path):
+            raise ValueError(
+                f"set_path.path: expected a Path, a Pose or a list of Poses, got "
+                f"{short_repr(path)} (numbers: for a position give Pose.from_xyz(x, y, z))"
+            )
         bad = next((i for i, w in enumerate(path) if not isinstance(w, Pose)), None)
-        if bad is None:
-            return list(path)
-        raise ValueError(f"set_path: waypoint {bad} is not a Pose: {path[bad]!r}")
-    raise ValueError(f"set_path: expected a Path, a Pose or a list of Poses, got {path!r}")
+        if bad is not None:
+            raise ValueError(
+                f"set_path.path[{bad}]: expected a Pose, got {short_repr(path[bad])} "
+                f"({type(path[bad]).__name__})"
+            )
+        waypoints = list(path)
+    else:
+        raise ValueError(
+            f"set_path.path: expected a Path, a Pose or a list of Poses, got {short_repr(path)}"
+        )
+    if not waypoints:
+        raise ValueError(
+            f"set_path.path: expected at least one waypoint, got {short_repr(path)} (an empty "
+            "path; stop() stops the agent)"
+        )
+    return waypoints
+
+
+def _finite_command(vx: Any, vy: Any, vz: Any, wz: Any) -> tuple[float, float, float, float]:
+    for name, value in (("vx", vx), ("vy", vy), ("vz", vz), ("wz", wz)):
+        if not (_is_real(value) and math.isfinite(value)):
+            raise ValueError(
+                f"set_cmd_vel.{name}: expected a finite number (m/s or rad/s), got "
+                f"{short_repr(value)}"
+            )
+    return float(vx), float(vy), float(vz), float(wz)
+
+
+def _is_real(value: Any) -> bool:
+    """A real number (int, float, numpy scalar), not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 class AgentMotionApi:
@@ -267,6 +302,9 @@ class AgentMotionApi:
             final_orientation_align: End turned to the last waypoint's orientation.
             direction: "forward", "backward" or "auto" (differential); None uses the
                 controller's ``default_direction``.
+
+        Raises:
+            ValueError: for an empty path, or an item that is not a Pose (naming its index).
         """
         waypoints = _waypoints(path)
         base = self._base("set_path")
@@ -289,7 +327,15 @@ class AgentMotionApi:
     def set_goal_pose(self, goal: Pose, direction: MovementDirection | str | None = None) -> None:
         """Drive to ``goal`` (a one-waypoint path)."""
         if not isinstance(goal, Pose):
-            raise ValueError(f"set_goal_pose: expected a Pose, got {goal!r}")
+            hint = (
+                " (numbers: for a position give Pose.from_xyz(x, y, z))"
+                if isinstance(goal, (list, tuple)) and goal and all(_is_real(v) for v in goal)
+                else ""
+            )
+            raise ValueError(
+                f"set_goal_pose.goal: expected a Pose, got {short_repr(goal)} "
+                f"({type(goal).__name__}){hint}"
+            )
         self.set_path([goal], direction=direction)
 
     def set_cmd_vel(
@@ -298,8 +344,10 @@ class AgentMotionApi:
         """Follow a body-frame velocity command (m/s, rad/s) until stopped or given a path.
 
         Raises:
-            ValueError: for a sideways command (``vy``) on a differential robot.
+            ValueError: for a value that is not a finite number (naming it), or a sideways
+                command (``vy``) on a differential robot.
         """
+        command = _finite_command(vx, vy, vz, wz)
         base = self._base("set_cmd_vel")
         if base is None:
             return
@@ -308,7 +356,7 @@ class AgentMotionApi:
                 f"set_cmd_vel: vy={vy!r} but a differential robot cannot move sideways"
             )
         self.motion_result = None
-        base.set_velocity(self._agent, (float(vx), float(vy), float(vz), float(wz)))
+        base.set_velocity(self._agent, command)
 
     def stop(self) -> None:
         """Stop moving and forget the goal and path."""

@@ -44,19 +44,21 @@ _YAML_TYPES = (type(None), bool, int, float, str, list, tuple, dict)
 _SCALARS = {bool: (bool,), int: (int,), float: (int, float), str: (str,)}
 
 
-def load_yaml_config(config_path: PathLike) -> dict[str, Any]:
+def load_yaml_config(config_path: PathLike, *, allow_empty: bool = True) -> dict[str, Any]:
     """Load a YAML file whose top level is a mapping.
 
     Args:
         config_path: Path of the YAML file.
+        allow_empty: Whether an empty file (or one of comments only) is ``{}``; scenario
+            loaders pass False, since an empty scenario is a mistake (a wrong or truncated file).
 
     Returns:
-        The parsed mapping; ``{}`` for an empty file.
+        The parsed mapping; ``{}`` for an empty file when ``allow_empty``.
 
     Raises:
         FileNotFoundError: If ``config_path`` is not a file (the message gives the absolute path).
-        ValueError: If the YAML is malformed (naming the file, line and column) or its top level
-            is not a mapping (naming the file).
+        ValueError: If the YAML is malformed (naming the file, line and column), its top level
+            is not a mapping (naming the file), or it is empty and ``allow_empty`` is False.
     """
     path = Path(config_path)
     if not path.is_file():
@@ -69,6 +71,11 @@ def load_yaml_config(config_path: PathLike) -> dict[str, Any]:
         problem = getattr(exc, "problem", None) or str(exc)
         where = f"{path}, line {mark.line + 1}, column {mark.column + 1}" if mark else str(path)
         raise ValueError(f"{where}: invalid YAML: {problem}") from exc
+    if data is None and not allow_empty:
+        raise ValueError(
+            f"{path}: the file is empty (no YAML mapping); a scenario needs at least one "
+            "section, e.g. 'simulation:' or 'entities:'"
+        )
     if data is None:
         return {}
     if not isinstance(data, dict):
@@ -170,6 +177,7 @@ def dataclass_from_dict(
     strict_keys: Sequence[str] | None = None,
     source: PathLike | None = None,
     section: str | None = None,
+    extra_keys: Sequence[str] = (),
 ) -> T:
     """Construct a dataclass from a config mapping by field introspection.
 
@@ -191,6 +199,8 @@ def dataclass_from_dict(
             and other keys in ``config`` are ignored (not errors) in this mode.
         source: File the config came from, named in error messages.
         section: Name of the config section, used in messages instead of ``cls.__name__``.
+        extra_keys: Keys the caller reads itself (e.g. ``pose`` and ``yaw``), named among the
+            valid keys when an unknown key is reported.
 
     Returns:
         An instance of ``cls``.
@@ -215,7 +225,8 @@ def dataclass_from_dict(
         raise ValueError(f"{label}: {bad_names[0]!r} is not a field of {cls.__name__}")
     key_of = {name: aliases.get(name, name) for name in selected}
     if strict_keys is None:
-        _reject_unknown_keys(config, set(key_of.values()) | set(key_of), where, label)
+        known = set(key_of.values()) | set(key_of) | set(extra_keys)
+        _reject_unknown_keys(config, known, where, label)
     hints = _type_hints(cls)
     kwargs: dict[str, Any] = {}
     for name, field in init_fields.items():

@@ -9,6 +9,7 @@ from typing import Any
 
 from fleet_async.core.base.camera_config import CameraConfig, parse_camera_config
 from fleet_async.core.base.config_utils import dataclass_from_dict, load_yaml_config
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import (
     CollisionDetectionMethod,
     SpatialHashCellSizeMode,
@@ -22,7 +23,7 @@ LOG_LEVELS = ("debug", "info", "warn", "warning", "error", "critical")
 
 def _require(ok: bool, name: str, value: object, expected: str) -> None:
     if not ok:
-        raise ValueError(f"SimulationParams.{name}: expected {expected}, got {value!r}")
+        raise ValueError(f"SimulationParams.{name}: expected {expected}, got {short_repr(value)}")
 
 
 def _is_number(value: object) -> bool:
@@ -40,7 +41,9 @@ class SimulationParams:
     Attributes:
         target_rtf: Real-time factor to pace ``run_simulation`` at; 0 runs as fast as possible.
         timestep: Sim seconds per step (> 0).
-        duration: Default ``run_simulation`` length in sim seconds; <= 0 runs until interrupted.
+        duration: Default ``run_simulation`` length in sim seconds (>= 0); 0 runs until
+            interrupted. A negative value is refused (``run_simulation(duration=-1)`` keeps the
+            seed's "<= 0 runs until interrupted").
         gui: Open the PyBullet GUI (falls back to DIRECT without a display).
         physics: Step PyBullet's dynamics; when False every body is kinematic.
         monitor: Report sim time, real-time factor, objects and collisions while running.
@@ -176,7 +179,12 @@ class SimulationParams:
             self.target_rtf,
             "a number >= 0",
         )
-        _require(num(self.duration), "duration", self.duration, "a finite number")
+        _require(
+            num(self.duration) and self.duration >= 0,
+            "duration",
+            self.duration,
+            "a finite number >= 0 (0: run until interrupted)",
+        )
         freq = self.collision_check_frequency
         _require(
             freq is None or (num(freq) and freq >= 0),

@@ -11,6 +11,7 @@ a warning and returns False, until ``set_collision_mode`` makes it movable.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, ClassVar, cast
 
@@ -37,6 +38,8 @@ if TYPE_CHECKING:
     from fleet_async.core.bodies.host import BodyHost
 
 __all__ = ["ObjectRemovedError", "ShapeParams", "SimObject", "SimObjectSpawnParams"]
+
+logger = logging.getLogger(__name__)
 
 
 class SimObject(ObjectCallbacks, SimObjectConstructors):
@@ -160,6 +163,11 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         self._store = cast("KinematicState", RemovedState(self._removed))
         self._row = self.object_id = -1
         self.sim_core = None
+
+    @property
+    def is_removed(self) -> bool:
+        """Whether the object has left the simulation it belonged to."""
+        return self._removed is not None
 
     def check_not_removed(self, what: str) -> None:
         """Raise ObjectRemovedError (naming the object and ``what``) if it left its sim."""
@@ -310,20 +318,23 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         ``standalone.py``).
 
         Returns:
-            True once attached; False (with a warning naming the body's links) for a link name
-            this object does not have.
+            True once attached; False, with a warning, for an object that is not pickable, one
+            already attached (to this or another parent: the reference API's contract, "False
+            otherwise") or a link name this object does not have (naming the body's links).
 
         Raises:
-            ValueError: attaching to itself, an object already attached (to this or another
-                parent), a cycle, objects of different simulations, a link index out of range,
-                both ``relative_pose`` and ``keep_world_pose``, or an unsupported
-                ``joint_type``.
+            ValueError: attaching to itself, a cycle, objects of different simulations, a link
+                index out of range, both ``relative_pose`` and ``keep_world_pose``, or an
+                unsupported ``joint_type``.
         """
         if joint_type != p.JOINT_FIXED:
             raise ValueError(
                 f"attach_object: joint_type {joint_type!r} is not supported; "
                 "only pybullet.JOINT_FIXED (4) is"
             )
+        if not obj.pickable and obj is not self:
+            logger.warning("attach_object: %r is not pickable (pickable=False); not attached", obj)
+            return False
         if self._solo is not None:
             if obj.sim_core is not None:
                 raise ValueError(

@@ -119,6 +119,7 @@ class SimObjectSpawnParams:
                 f"(keys given: {sorted(config)})"
             )
         pose, yaw = config.pop("pose", None), config.pop("yaw", None)
+        pose_keys = ("pose", "yaw")
         if "initial_pose" in config:
             if pose is not None or yaw is not None:
                 logger.warning(
@@ -136,7 +137,9 @@ class SimObjectSpawnParams:
         for name in ("visual_shape", "collision_shape"):
             if isinstance(config.get(name), dict):
                 config[name] = ShapeParams.from_dict(config[name], source=source)
-        return dataclass_from_dict(cls, config, source=source, section=cls.__name__)
+        return dataclass_from_dict(
+            cls, config, source=source, section=cls.__name__, extra_keys=pose_keys
+        )
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:

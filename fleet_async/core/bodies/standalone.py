@@ -158,9 +158,12 @@ class StandaloneState:
         held = child.get_attached_parent()
         if held is not None:
             where = "this object" if held is parent else repr(held)
-            raise ValueError(
-                f"attach_object: {child!r} is already attached to {where}; detach it first"
+            logger.warning(
+                "attach_object: %r is already attached to %s; not attached (detach it first)",
+                child,
+                where,
             )
+            return False
         ancestor: SimObject | None = parent
         while ancestor is not None:
             if ancestor is child:

@@ -274,8 +274,11 @@ class Elevator(Device):
             self._arrive()
             return True
         self._passengers = self.objects_on_platform()
+        world = self._require_sim("depart").world
         for obj in self._passengers:
-            self.attach_object(obj, keep_world_pose=True)
+            # The world's attach, not attach_object: a lift carries what stands on it,
+            # pickable or not.
+            world.attach(self, obj, -1, None, True)
         self._set_state(ElevatorState.MOVING)
         self.emit(
             DeviceEvents.ELEVATOR_DEPARTED,

@@ -13,6 +13,7 @@ from typing import overload
 
 import numpy as np
 
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.quaternions import quat_from_euler, quat_multiply, quat_to_rot_matrix
 
@@ -82,11 +83,23 @@ class Path:
                 names its index).
         """
         if isinstance(waypoints, Pose) or not isinstance(waypoints, Iterable):
-            raise TypeError(f"Path.waypoints: expected an iterable of Pose, got {waypoints!r}")
+            raise TypeError(
+                f"Path.waypoints: expected an iterable of Pose, got {short_repr(waypoints)} "
+                f"({type(waypoints).__name__})"
+            )
         items = list(waypoints)
+        if items and all(isinstance(v, numbers.Real) for v in items):
+            raise TypeError(
+                f"Path.waypoints: expected an iterable of Pose, got {short_repr(waypoints)} "
+                "(numbers: for one position give [Pose.from_xyz(x, y, z)], for several "
+                "Path.from_positions([[x, y, z], ...]))"
+            )
         for i, waypoint in enumerate(items):
             if not isinstance(waypoint, Pose):
-                raise TypeError(f"Path.waypoints[{i}]: expected Pose, got {waypoint!r}")
+                raise TypeError(
+                    f"Path.waypoints[{i}]: expected a Pose, got {short_repr(waypoint)} "
+                    f"({type(waypoint).__name__}) in {short_repr(waypoints)}"
+                )
         self.waypoints = items
 
     @classmethod

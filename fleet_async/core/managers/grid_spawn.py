@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from fleet_async.core.base.config_utils import dataclass_from_dict
+from fleet_async.core.base.reprs import short_repr
 
 __all__ = [
     "GridSpawnParams",
@@ -35,7 +36,7 @@ def _is_int(value: Any) -> bool:
 
 def _vector3(value: Any, field: str) -> list[float]:
     """2 or 3 finite numbers as ``[x, y, z]`` (a missing z is 0), or ValueError naming ``field``."""
-    expected = f"GridSpawnParams.{field}: expected 2 or 3 finite numbers, got {value!r}"
+    expected = f"GridSpawnParams.{field}: expected 2 or 3 finite numbers, got {short_repr(value)}"
     if isinstance(value, (str, bytes)) or not isinstance(value, (Sequence, np.ndarray)):
         raise ValueError(expected)
     items = list(value)
@@ -60,7 +61,7 @@ class GridSpawnParams:
         y_min: Minimum Y cell index.
         y_max: Maximum Y cell index (inclusive, >= ``y_min``).
         spacing: ``[sx, sy, sz]`` metres between neighbouring cells; ``[sx, sy]`` means
-            ``sz = 0``.
+            ``sz = 0``. Each is > 0 on an axis with more than one cell, else >= 0.
         offset: ``[ox, oy, oz]`` world position (metres) of cell ``(0, 0, 0)``; ``[ox, oy]``
             means ``oz = 0``.
         z_min: Minimum Z cell index (default 0).
@@ -91,6 +92,20 @@ class GridSpawnParams:
             setattr(self, hi_name, int(hi))
         self.spacing = _vector3(self.spacing, "spacing")
         self.offset = _vector3(self.offset, "offset")
+        self._check_spacing()
+
+    def _check_spacing(self) -> None:
+        """Each spacing is >= 0, and > 0 on an axis with more than one cell: a zero spacing
+        there stacks objects on one spot, a negative one is a sign error."""
+        for i, axis in enumerate("xyz"):
+            value = self.spacing[i]
+            cells = getattr(self, f"{axis}_max") - getattr(self, f"{axis}_min") + 1
+            if value < 0 or (value == 0 and cells > 1):
+                expected = "> 0" if cells > 1 else ">= 0"
+                raise ValueError(
+                    f"GridSpawnParams.spacing: expected the {axis} spacing {expected} (the grid "
+                    f"has {cells} cell(s) along {axis}), got {short_repr(self.spacing)}"
+                )
 
     @property
     def total_cells(self) -> int:

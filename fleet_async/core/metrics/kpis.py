@@ -1,7 +1,8 @@
 """Fleet KPIs: one summary row per run, and a per-robot table on request.
 
 ``sim.kpis()`` returns the simulation's :class:`KpiCollector`, subscribed to the event bus on
-first call; it counts from that moment on. Counts (actions, tasks, collisions, mission errors)
+first call; it counts from that moment on (a first call after steps have run is an error unless
+it says ``from_now=True``). Counts (actions, tasks, collisions, mission errors)
 come from events. Time and distance come from one vectorised pass over the robots' rows of the
 state store after every step: each robot's step is classified as *moving* (its linear or
 angular velocity over the step is non-zero), *waiting* (not moving while an action of its
@@ -418,9 +419,28 @@ class KpiApi:
 
     _kpis: KpiCollector | None = None
 
-    def kpis(self) -> KpiCollector:
+    def kpis(self, *, from_now: bool = False) -> KpiCollector:
         """The fleet KPI collector (``.summary()``, ``.per_robot()``); it subscribes on the
-        first call and counts from then on, so call it before running."""
+        first call and counts from then on, so call it before running.
+
+        Args:
+            from_now: Allow the first call after steps have run (a warm-up left uncounted, a
+                restored checkpoint); the figures count from this call on.
+
+        Raises:
+            RuntimeError: if this first call comes after steps have run and ``from_now`` is
+                False: the collector would have missed them, and its figures for a finished
+                run would be all zeros.
+        """
         if self._kpis is None:
-            self._kpis = KpiCollector(cast("SimulationKernel", self))
+            sim = cast("SimulationKernel", self)
+            if sim.step_count > 0 and not from_now:
+                raise RuntimeError(
+                    f"sim.kpis(): first called after {sim.step_count} steps "
+                    f"({sim.sim_time:g} s of sim time) had run; the collector counts from its "
+                    "first call, so it would leave them out (all zeros after a finished run). "
+                    "Call sim.kpis() before running, or sim.kpis(from_now=True) to count from "
+                    "here on"
+                )
+            self._kpis = KpiCollector(sim)
         return self._kpis

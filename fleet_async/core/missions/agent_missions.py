@@ -12,6 +12,7 @@ step.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.actions.action import Action, MoveAction, WaitAction
@@ -67,8 +68,8 @@ class AgentMissionApi:
 
     def move(self, path: Path | Pose | list[Pose], **options: Any) -> Any:
         """Follow ``path``; options as MoveAction (auto_approach, direction, ...)."""
-        if not isinstance(path, (Path, Pose)):
-            path = Path(list(path))
+        if not isinstance(path, (Path, Pose, list, tuple)) and isinstance(path, Iterable):
+            path = list(path)  # MoveAction names what it got when this is not Poses
         action = MoveAction(path=path, **options)  # type: ignore[arg-type]  # takes a Pose too
         return self.submit(action)
 

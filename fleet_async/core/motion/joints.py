@@ -22,10 +22,19 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 import numpy as np
 import pybullet as p
 
+from fleet_async.core.base.reprs import short_repr
+
 if TYPE_CHECKING:
     from fleet_async.core.motion.host import Numbered
 
-__all__ = ["JointInfo", "JointMotion", "JointSet", "JointTargets", "ToleranceSpec"]
+__all__ = [
+    "JointInfo",
+    "JointMotion",
+    "JointSet",
+    "JointTargets",
+    "ToleranceSpec",
+    "check_tolerance_spec",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -101,6 +110,27 @@ def read_joint_infos(
             )
         )
     return tuple(infos)
+
+
+def _finite_tolerance(value: Any) -> bool:
+    real = isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+    return real and math.isfinite(value) and value >= 0
+
+
+def check_tolerance_spec(spec: Any, what: str) -> None:
+    """Refuse a tolerance spec (None, a number, a list or a name-keyed mapping) holding a value
+    that is not a finite number >= 0, naming ``what`` and the value."""
+    if spec is None:
+        return
+    values = list(spec.values()) if isinstance(spec, Mapping) else spec
+    if not isinstance(values, (list, tuple, np.ndarray)):
+        values = [values]
+    for value in values:
+        if not _finite_tolerance(value):
+            raise ValueError(
+                f"{what}: expected finite numbers >= 0 (rad or m), got {short_repr(value)} "
+                f"in {short_repr(spec)}"
+            )
 
 
 class JointSet:
@@ -349,10 +379,10 @@ class JointSet:
             value = tolerance[j]
         else:
             value = tolerance
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or value < 0:
+        if not _finite_tolerance(value):
             raise ValueError(
-                f"{self.owner}: joint tolerance for {self.infos[j].name!r} must be a number >= 0, "
-                f"got {value!r}"
+                f"{self.owner}: joint tolerance for {self.infos[j].name!r} must be a finite "
+                f"number >= 0, got {short_repr(value)}"
             )
         return float(value)
 

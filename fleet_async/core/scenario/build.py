@@ -159,9 +159,10 @@ class ScenarioApi:
 
         Raises:
             FileNotFoundError: if ``yaml_path`` does not exist.
-            ValueError: for malformed YAML (file, line and column) or a bad scenario.
+            ValueError: for malformed YAML (file, line and column), an empty file or a bad
+                scenario.
         """
-        config = load_yaml_config(yaml_path)
+        config = load_yaml_config(yaml_path, allow_empty=False)
         return cls.from_dict(config, source=str(yaml_path), base_dir=FsPath(yaml_path).parent)
 
     def spawn_robots_from_config(

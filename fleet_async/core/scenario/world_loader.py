@@ -342,10 +342,10 @@ class WorldLoadingApi:
 
         Returns:
             The new objects in load order (Open-RMF doors, lifts and workcells last, as
-            devices), named after their include ``<name>`` (else the URI's model name), SDF
-            model name or mesh file stem. Their ``user_data`` holds ``world_source`` (the
-            source path), ``model_file`` (the SDF or mesh file the body came from) and, for
-            includes, ``uri``.
+            devices; an empty config loads nothing: ``[]``), named after their include
+            ``<name>`` (else the URI's model name), SDF model name or mesh file stem. Their
+            ``user_data`` holds ``world_source`` (the source path), ``model_file`` (the SDF or
+            mesh file the body came from) and, for includes, ``uri``.
 
         Raises:
             WorldLoadError: listing every model that failed (name, reason, paths), after
@@ -355,6 +355,9 @@ class WorldLoadingApi:
             ValueError / TypeError: for a bad ``world_config`` (unknown key, no source...).
         """
         sim = cast("SimulationKernel", self)
+        if isinstance(world_config, Mapping) and not world_config:
+            logger.info("load_world({}): an empty world config; nothing to load")
+            return []  # as the reference implementation: nothing asked, nothing loaded
         opts = read_world_config(world_config, skip_models, base_dir)
         loader = _load_bodies(sim, opts)
         if loader.failures and opts.on_error == "raise":

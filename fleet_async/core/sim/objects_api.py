@@ -6,6 +6,7 @@ poses in bulk. The objects themselves live in ``world/world.py``.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -17,6 +18,8 @@ if TYPE_CHECKING:
     from fleet_async.core.world.world import World
 
 __all__ = ["ObjectsApi"]
+
+logger = logging.getLogger(__name__)
 
 
 class ObjectsApi:
@@ -78,19 +81,29 @@ class ObjectsApi:
             obj: The object.
             notify: Emit the spawn events now (else ``sim.world.announce(obj)`` does later).
 
+        A second call for an object already in this simulation does nothing (as the reference
+        implementation; logged at debug level).
+
         Raises:
-            ValueError: if ``obj`` already belongs to this or another simulation.
+            ValueError: if ``obj`` belongs to another simulation.
         """
+        if obj.sim_core is self and self._world.get(obj.object_id) is obj:
+            logger.debug("add_object: %r is already in this simulation; nothing to do", obj)
+            return
         self._world.add(obj, notify)
 
     def remove_object(self, obj: SimObject) -> None:
         """Remove ``obj`` from the simulation, its managers and PyBullet.
 
-        Objects it carried are detached where they are.
+        Objects it carried are detached where they are. Removing an object that was already
+        removed does nothing (as the reference implementation; logged at debug level).
 
         Raises:
-            ValueError: if ``obj`` is not part of this simulation.
+            ValueError: if ``obj`` is part of another simulation, or never was part of one.
         """
+        if obj.sim_core is None and obj.is_removed:
+            logger.debug("remove_object: %r was already removed; nothing to do", obj)
+            return
         if self._world.get(obj.object_id) is not obj:
             raise ValueError(f"remove_object: {obj!r} is not part of this simulation")
         for manager in list(self._managers):

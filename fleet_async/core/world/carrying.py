@@ -67,9 +67,12 @@ class Carrying(Generic[_B]):
         held = self._attachments.of_child(child)
         if held is not None:
             where = "this object" if held.parent is parent else repr(held.parent)
-            raise ValueError(
-                f"attach_object: {child!r} is already attached to {where}; detach it first"
+            logger.warning(
+                "attach_object: %r is already attached to %s; not attached (detach it first)",
+                child,
+                where,
             )
+            return False
         if self._attachments.is_ancestor(child, parent):
             raise ValueError(
                 f"attach_object: {child!r} carries {parent!r}; attaching would make a cycle"
