@@ -96,10 +96,15 @@ class FleetInterface:
         self._viz_every = _steps(visualization_period, dt) if visualization_period > 0 else 0
         self.vehicles: dict[str, Vehicle] = {}
         self._reasons: dict[str, list[str]] = defaultdict(list)
+        # Vehicles with work in progress, and those with news: a step looks at these only, so
+        # a served fleet that mostly waits costs nothing per idle vehicle.
+        self._active: set[str] = set()
+        self._changed: set[str] = set()
         for name, agent in self._select(sim, robots):
             vehicle = Vehicle(agent, sim, deviation_xy, self._change_hook(name), name=name)
             agent.external_driver = driver
             self.vehicles[name] = vehicle
+        self._index = {name: i for i, name in enumerate(self.vehicles)}  # the served order
         self._inbox: deque[tuple[str, Command]] = deque()
         self._lock = threading.Lock()
         self._scheduled: dict[int, list[tuple[str, Command]]] = defaultdict(list)
@@ -138,8 +143,13 @@ class FleetInterface:
         return chosen
 
     def _change_hook(self, name: str) -> Any:
-        reasons = self._reasons[name]
-        return reasons.append
+        reasons, changed = self._reasons[name], self._changed
+
+        def note(reason: str) -> None:
+            reasons.append(reason)
+            changed.add(name)
+
+        return note
 
     # ----- the master's side ------------------------------------------------------------------
 
@@ -196,23 +206,30 @@ class FleetInterface:
             if tracer is not None:
                 tracer.command(step, name, command.to_json())
             self.vehicles[name].apply(command)
-        for vehicle in self.vehicles.values():
+            self._active.add(name)
+        for name in self._in_order(self._active):
+            vehicle = self.vehicles[name]
             vehicle.advance()
+            if not vehicle.busy:
+                self._active.discard(name)
         self._report(step)
+
+    def _in_order(self, names: set[str]) -> list[str]:
+        """``names`` in the served order (a set's order is not deterministic)."""
+        return sorted(names, key=self._index.__getitem__)
 
     def _trace_states(self) -> None:
         """A ``vehicle_state`` trace event for each vehicle whose order or tasks changed."""
         tracer = self.sim.tracer
         if tracer is None:
             return
-        for name, reasons in self._reasons.items():
-            if reasons:
-                vehicle = self.vehicles[name]
-                tracer.event("vehicle_state", vehicle.agent.object_id, **trace_state(vehicle))
+        for name in self._in_order(self._changed):
+            vehicle = self.vehicles[name]
+            tracer.event("vehicle_state", vehicle.agent.object_id, **trace_state(vehicle))
 
     def _report(self, step: int) -> None:
         self._trace_states()
-        changed = [name for name, reasons in self._reasons.items() if reasons]
+        changed = self._in_order(self._changed)
         periodic = step % self._state_every == 0
         if self._listeners:
             for name in self.vehicles if periodic else changed:
@@ -223,6 +240,7 @@ class FleetInterface:
                         listener.on_visualization(pose)
         for name in changed:
             self._reasons[name].clear()
+        self._changed.clear()
 
     def _report_state(self, name: str) -> None:
         vehicle, reasons = self.vehicles[name], self._reasons[name]

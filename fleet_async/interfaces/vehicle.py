@@ -117,6 +117,14 @@ class Vehicle:
         """Whether an order is in progress: nodes to reach or tasks not done."""
         return bool(self._nodes or self._pending or self._running or self._drive)
 
+    @property
+    def busy(self) -> bool:
+        """Whether :meth:`advance` has anything to do: a drive, a task, or a released edge to
+        take (and no pause)."""
+        if self._drive is not None or self._running is not None or self._pending:
+            return True
+        return not self.paused and bool(self._edges) and self._edges[0].released
+
     def snapshot(self) -> VehicleSnapshot:
         """The vehicle's state now (immutable)."""
         agent = self.agent
@@ -384,13 +392,8 @@ class Vehicle:
     # ----- progress ---------------------------------------------------------------------------
 
     def advance(self) -> None:
-        """Follow up on what the vehicle is doing (at a step boundary).
-
-        An idle vehicle (no drive, no task, nothing released to drive to) costs one check: a
-        served fleet of thousands mostly waits.
-        """
-        idle = self._drive is None and self._running is None and not self._pending
-        if idle and (self.paused or not (self._edges and self._edges[0].released)):
+        """Follow up on what the vehicle is doing (at a step boundary)."""
+        if not self.busy:
             return
         if self._drive is not None:
             x, y = self._xy()

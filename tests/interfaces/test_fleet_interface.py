@@ -85,9 +85,12 @@ def reasons(link, name="r0"):
 
 
 def test_an_order_is_driven_node_by_node_to_the_end(served):
-    sim, agent, _, link = served
+    sim, agent, fleet, link = served
     link.send("r0", route())
-    steps(sim, 200)
+    steps(sim, 5)
+    assert fleet._active == {"r0"}  # followed up on each step while it works
+    steps(sim, 195)
+    assert fleet._active == set()  # done: an idle vehicle costs a step nothing
     reached = [
         (snap.last_node_id, snap.last_node_sequence)
         for snap, why in link.states["r0"]
