@@ -58,15 +58,23 @@ class SimEvent:
     until triggered), and three hooks, ``guard``, ``uncancellable`` and ``abandon``.
     """
 
-    __slots__ = ("callbacks", "kernel", "ok", "raw_value")
+    __slots__ = ("_defused", "callbacks", "kernel", "ok", "raw_value")
 
+    fails_run_unhandled = True
+    """A failure of this event that nobody waits on fails the run unless it is defused
+    (SimPy's rule); False for events whose failures are reported another way (missions)."""
+    per_waiter = False
+    """The failure is made for one waiter (an interrupt, a cancellation): thrown as is. Other
+    failures are thrown as a copy per waiter, chained to the original."""
     guard: Callable[[Mission], bool] | None = None
     """Checked before the kernel resumes a mission from this event (deliveries only)."""
     uncancellable = False
     """A park on this event is not ended by cancellation (a task group's join)."""
-    abandon: Callable[[Mission], None] | None = None
-    """Called when a mission stops waiting on this event because it was interrupted or
-    cancelled (after it left ``callbacks``): undo what the wait set up."""
+    abandon: Callable[[Mission, bool], None] | None = None
+    """Called as ``abandon(mission, cancelled)`` when a mission stops waiting on this event
+    because it was cancelled (``cancelled`` True) or interrupted (False), after it left
+    ``callbacks``: undo what the wait set up (a cancellation withdraws a request; an interrupt
+    leaves it queued, as SimPy does, for the mission to await again)."""
 
     def __init__(self, kernel: Kernel) -> None:
         self.kernel = kernel
@@ -74,6 +82,16 @@ class SimEvent:
         self.raw_value: Any = PENDING
         self.ok = True
         """Whether the event succeeded (meaningful once triggered)."""
+
+    @property
+    def defused(self) -> bool:
+        """Whether a failure of this event nobody waits on is accepted (does not fail the
+        run). Set it to True to let an event fail unobserved."""
+        return bool(getattr(self, "_defused", False))
+
+    @defused.setter
+    def defused(self, value: bool) -> None:
+        self._defused = bool(value)
 
     @property
     def triggered(self) -> bool:
@@ -207,6 +225,11 @@ class Kernel:
         """Wall time (perf_counter) at which ``holding`` started its non-sim await."""
         self.holding_what: Any = None
         """What ``holding`` awaits (the object forwarded to the host loop)."""
+        self.resumes = 0
+        """Resumptions of missions so far (the watchdog thread tells a mission that runs on
+        from one that was resumed again)."""
+        self.on_unhandled: Callable[[SimEvent], None] | None = None
+        """Told about a failed event that nobody waited on and nobody defused."""
         self.in_step = 0
         """1 while the simulation runs a step (events it triggers are due at the step's end),
         else 0."""
@@ -321,17 +344,12 @@ def _never(_: BaseException) -> bool:
 
 
 def kernel_of(sim: Any, what: str) -> Kernel:
-    """The kernel of the run in progress on ``sim``.
+    """The kernel of ``sim``'s mission runtime (made on first use).
 
     Raises:
-        NoMissionRuntimeError: if no ``fleet_async.run`` is in progress.
+        NoMissionRuntimeError: when called from another thread than the runtime's.
     """
-    runtime = sim.mission_runtime
-    if runtime is None:
-        raise NoMissionRuntimeError(
-            f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
-        )
-    kernel: Kernel = runtime.kernel
+    kernel: Kernel = sim.ensure_mission_runtime().kernel
     if _thread() != kernel.thread:
         raise kernel.outside_error(what)
     return kernel

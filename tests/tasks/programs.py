@@ -289,7 +289,7 @@ def run_fleet(sim: Any, program: Program, backend: str) -> tuple[list[tuple[Any,
 
     until = sim.sim_time + program.until * sim.params.timestep
     try:
-        fa.run(sim, main, until=until, backend=backend, watchdog=10.0)
+        fa.run(sim, main, until=until, then="cancel", backend=backend, watchdog=10.0)
         outcome = "ok"
     except (ValueError, BaseExceptionGroup) as error:
         outcome = f"{type(error).__name__}: {_leaves(error)}"

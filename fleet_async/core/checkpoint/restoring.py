@@ -63,8 +63,12 @@ def _check_target(sim: SimulationKernel, header: dict[str, Any], step_count: int
     where = "restore_state"
     if sim.params.physics:
         raise CheckpointError(f"{where}: physics=True: checkpoints cover kinematic simulations")
-    if sim.mission_runtime is not None:
-        raise CheckpointError(f"{where}: missions are running; restore before fleet_async.run")
+    runtime = sim.mission_runtime
+    if runtime is not None and (runtime.driving or sim.suspended_missions()):
+        raise CheckpointError(
+            f"{where}: missions are running or suspended ({sim.suspended_missions()}); restore "
+            "before fleet_async.run, or end them with sim.end_missions() first"
+        )
     if step_count != 0:
         raise CheckpointError(
             f"{where}: this simulation has run {step_count} steps; restore into one freshly "

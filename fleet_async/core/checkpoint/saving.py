@@ -40,10 +40,18 @@ def _refuse_unsaveable(sim: SimulationKernel, parts: CheckpointParts) -> None:
             "save_state: physics=True: PyBullet's dynamic state is not captured; checkpoints "
             "cover kinematic simulations (physics=False)"
         )
-    if sim.mission_runtime is not None:
+    runtime = sim.mission_runtime
+    if runtime is not None and runtime.driving:
         raise CheckpointError(
             "save_state: missions are running (fleet_async.run in progress), and a mission "
             "waiting mid-await cannot be saved; save before fleet_async.run or after it returns"
+        )
+    waiting = sim.suspended_missions()
+    if waiting:
+        raise CheckpointError(
+            f"save_state: missions {waiting} wait mid-await (a run stopped at until= left "
+            "them suspended), and a mission's place in its code cannot be saved; continue them "
+            "with fleet_async.run(sim, until=...) or end them with sim.end_missions() first"
         )
     if sim.in_step:
         raise CheckpointError("save_state: not inside step_once; save between steps")
