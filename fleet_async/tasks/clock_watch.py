@@ -94,7 +94,8 @@ class ClockWatch:
 
 def where_running(thread_id: int) -> str:
     """``at file:line in function`` of what ``thread_id`` runs now (its innermost frame)."""
-    frame = sys._current_frames().get(thread_id)
+    # The only way to see another thread's stack; read-only, and only when warning.
+    frame = sys._current_frames().get(thread_id)  # noqa: SLF001
     if frame is None:
         return "at an unknown line"
     code = frame.f_code

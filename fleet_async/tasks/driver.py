@@ -9,6 +9,7 @@ next due event.
 from __future__ import annotations
 
 import asyncio
+import math
 import time
 import warnings
 from typing import TYPE_CHECKING, Any
@@ -17,7 +18,11 @@ import anyio
 import anyio.lowlevel
 
 from fleet_async.tasks.clock_watch import ClockWatch
-from fleet_async.tasks.errors import MissionDeadlockError, MissionStalledError
+from fleet_async.tasks.errors import (
+    MissionDeadlockError,
+    MissionStalledError,
+    NoMissionRuntimeError,
+)
 from fleet_async.tasks.missions import dispatch
 
 if TYPE_CHECKING:
@@ -65,7 +70,10 @@ class Driver:
         self.then = then
         self.on_deadlock = on_deadlock
         self.watchdog = watchdog
-        self.scope = anyio.CancelScope()
+        # Shielded, so that inside it the effective deadline tells whether a mission cancelled
+        # an anyio scope it entered (see _anyio_scope_misuse); a stop from outside reaches
+        # the driver through the watchdog task, which cancels this scope.
+        self.scope = anyio.CancelScope(shield=True)
         self.stalled: MissionStalledError | None = None
         self._cancel_exc = anyio.get_cancelled_exc_class()
         self._idle_predicate_steps = 0
@@ -123,6 +131,9 @@ class Driver:
                     await self._cancel_at_until()
                 return
             await dispatch(kernel)
+            if anyio.current_effective_deadline() == -math.inf and not self.scope.cancel_called:
+                runtime.root.fail(_anyio_scope_misuse(kernel))
+                continue  # the missions' cancellations are due at once; no checkpoint first
             if self._over():
                 return
             stuck = kernel.nothing_due() and not runtime.step_driven()
@@ -244,6 +255,13 @@ class Driver:
     async def watch(self) -> None:
         """The watchdog of non-sim awaits: fails the run when a mission holds the clock on
         one too long (a mission running Python code is the ClockWatch thread's)."""
+        try:
+            await self._watch_holds()
+        except self._cancel_exc:  # stopped from outside (Ctrl-C, a host scope): stop the run
+            self.scope.cancel()
+            raise
+
+    async def _watch_holds(self) -> None:
         kernel = self.runtime.kernel
         period = min(0.25, self.watchdog / 4)
         warned = False
@@ -272,6 +290,16 @@ def _hold_message(mission: Mission, what: Any, held: float) -> str:
         "(anyio.sleep, asyncio.sleep, trio.sleep), an anyio / asyncio / trio Lock, Event, "
         "Semaphore or queue, or real I/O. Inside missions use the sim-time versions: "
         "sim.sleep, sim.move_on_after, fleet_async.Event, Lock, Resource, Store"
+    )
+
+
+def _anyio_scope_misuse(kernel: Any) -> NoMissionRuntimeError:
+    return NoMissionRuntimeError(
+        f"at sim time {kernel.now * kernel.timestep:.3f} s a mission cancelled an anyio cancel "
+        "scope that a mission had entered (anyio.CancelScope, anyio.move_on_after, "
+        "anyio.fail_after): anyio's scopes belong to the host event loop and measure wall "
+        "time, so they cannot cancel sim-time awaits. In missions use sim.cancel_scope(), "
+        "sim.move_on_after() / sim.fail_after(), or mission.cancel()"
     )
 
 

@@ -17,11 +17,12 @@ mission runs (``fleet_async.tasks.missions.dispatch``).
 
 from __future__ import annotations
 
+import collections.abc
 import heapq
 import itertools
 import threading
 from collections.abc import Callable, Generator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from fleet_async.tasks.errors import Cancelled, NoMissionRuntimeError
 
@@ -160,6 +161,17 @@ class SimEvent:
             raise kernel.outside_error("awaiting a sim event")
         return (yield self)
 
+    # A host event loop that is handed a sim event as a task (anyio's start_soon(sim.sleep,
+    # 1) in a task group of anyio's, asyncio.create_task(sim.sleep(1))) steps it as a
+    # coroutine: say what happened instead of failing somewhere inside that library.
+    def send(self, value: Any) -> NoReturn:
+        """Refuse to run as a task of the host event loop (see the class doc)."""
+        raise NoMissionRuntimeError(_host_task_message(self))
+
+    def throw(self, *args: Any) -> NoReturn:
+        """Refuse to run as a task of the host event loop (see the class doc)."""
+        raise NoMissionRuntimeError(_host_task_message(self))
+
     def __and__(self, other: SimEvent) -> SimEvent:
         from fleet_async.tasks.conditions import AllOf  # conditions build on events
 
@@ -230,6 +242,8 @@ class Kernel:
         from one that was resumed again)."""
         self.on_unhandled: Callable[[SimEvent], None] | None = None
         """Told about a failed event that nobody waited on and nobody defused."""
+        self.after_event: Callable[[], None] | None = None
+        """Called after each processed event (invariant checks in tests; None in runs)."""
         self.in_step = 0
         """1 while the simulation runs a step (events it triggers are due at the step's end),
         else 0."""
@@ -337,6 +351,18 @@ class Kernel:
 
 
 _thread = threading.get_ident
+
+
+def _host_task_message(event: SimEvent) -> str:
+    return (
+        f"{event!r} was started as a task of the host event loop (anyio.create_task_group()"
+        ".start_soon, asyncio.create_task, a trio nursery): such tasks run outside sim time "
+        "and cannot wait on it. Inside missions start missions instead: "
+        "'async with sim.task_group() as tg: tg.start_soon(...)', or sim.spawn(...)"
+    )
+
+
+collections.abc.Coroutine.register(SimEvent)  # so that the host loop steps it and hears why
 
 
 def _never(_: BaseException) -> bool:

@@ -394,6 +394,7 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
     """
     queue = kernel.queue
     heappop = heapq.heappop
+    after = kernel.after_event
     while queue and queue[0][0] <= kernel.now:
         event = heappop(queue)[3]
         callbacks = event.callbacks
@@ -402,23 +403,31 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
             continue
         event.callbacks = None
         if not callbacks:
-            if not event.ok and event.fails_run_unhandled and kernel.on_unhandled is not None:
-                if not event.defused:
-                    kernel.on_unhandled(event)
+            unhandled = not event.ok and event.fails_run_unhandled and not event.defused
+            if unhandled and kernel.on_unhandled is not None:
+                kernel.on_unhandled(event)
             continue
-        for callback in callbacks:
-            if callback.__class__ is not Mission:
-                callback(event)
-                continue
-            guard = event.guard
-            if guard is not None and not guard(callback):
-                continue
-            value = event.raw_value
-            if not event.ok and not event.per_waiter:
-                value = waiter_copy(value)
-            answer = callback.step(not event.ok, value)
-            while answer is not PARKED:  # a non-sim await: the host loop serves it
-                answer = yield from _forward(kernel, callback, answer)
+        yield from _resume(kernel, event, callbacks)
+        if after is not None:
+            after()
+
+
+@types.coroutine
+def _resume(kernel: Kernel, event: SimEvent, callbacks: list[Any]) -> Generator[Any, Any, None]:
+    """Resume the waiters of a processed ``event``, in order (dispatch's inner loop)."""
+    for callback in callbacks:
+        if callback.__class__ is not Mission:
+            callback(event)
+            continue
+        guard = event.guard
+        if guard is not None and not guard(callback):
+            continue
+        value = event.raw_value
+        if not event.ok and not event.per_waiter:
+            value = waiter_copy(value)
+        answer = callback.step(not event.ok, value)
+        while answer is not PARKED:  # a non-sim await: the host loop serves it
+            answer = yield from _forward(kernel, callback, answer)
 
 
 @types.coroutine

@@ -118,8 +118,8 @@ class _Request(SimEvent):
             return
         if cancelled:
             self.withdraw()
-        elif self.mission is mission:
-            mission.keep_request(self)
+        elif self.mission is not None and self.mission is mission:
+            self.mission.keep_request(self)
 
     def withdraw(self) -> None:
         """Nobody will take what this request got: undo it (see the subclasses)."""

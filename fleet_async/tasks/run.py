@@ -164,7 +164,8 @@ async def run_async(
     runtime.kernel.is_host_cancel = driver.is_host_cancel
     try:
         await driver.run()
-        ended = driver.ends_runtime()
+        # A run that fails ends its missions: they were cancelled with the run's root scope.
+        ended = driver.ends_runtime() or bool(runtime.root.errors)
     finally:
         runtime.driving = False
         if ended:

@@ -12,8 +12,8 @@ when it is processed, naming where it was made, unless ``event.defused = True``.
 
 from __future__ import annotations
 
+import inspect
 import os
-import sys
 from collections import deque
 from collections.abc import Callable, Generator
 from typing import Any
@@ -100,11 +100,11 @@ class Event(SimEvent):
 
 def _caller() -> str:
     """``file:line`` of the first frame outside the mission layer (who made the event)."""
-    frame = sys._getframe(2)
-    for _ in range(6):
-        if frame.f_back is None or not frame.f_code.co_filename.startswith(_PACKAGE):
-            break
+    frame = inspect.currentframe()
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE):
         frame = frame.f_back
+    if frame is None:
+        return "an unknown place"
     return f"{frame.f_code.co_filename}:{frame.f_lineno}"
 
 
