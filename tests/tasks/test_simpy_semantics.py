@@ -123,6 +123,23 @@ def test_suspended_missions_cannot_be_checkpointed(backend, tmp_path):
         sim.save_state(tmp_path / "mid.ckpt")
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_closing_the_simulation_ends_its_suspended_missions(backend):
+    sim = _sim()
+    log = []
+
+    async def sleeper():
+        try:
+            await sim.sleep(10)
+        finally:
+            log.append(sim.now)
+
+    fa.run(sim, sleeper, until=2.0, backend=backend)
+    assert log == []
+    sim.close()
+    assert log == [2.0]
+
+
 # ----- failures ---------------------------------------------------------------------------
 
 

@@ -463,9 +463,16 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
             plugin.on_reset()
 
     def close(self) -> None:
-        """Disconnect from PyBullet; the simulation cannot step afterwards."""
-        self._memory.stop()
-        self._backend.disconnect()
+        """End the missions a run left suspended (their cleanup runs now), then disconnect
+        from PyBullet; the simulation cannot step afterwards."""
+        try:
+            if self.mission_runtime is not None and not self.mission_runtime.driving:
+                self.end_missions()
+        except Exception:  # a mission's cleanup failed: still close
+            logger.exception("a mission failed while ending with its simulation")
+        finally:
+            self._memory.stop()
+            self._backend.disconnect()
 
     def __enter__(self: _Sim) -> _Sim:
         return self
