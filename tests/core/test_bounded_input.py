@@ -32,7 +32,7 @@ def _grid_scenario(tmp_path, count, share=None):
 
 def test_a_grid_that_cannot_fit_in_memory_is_refused_before_anything_is_built(tmp_path):
     path = _grid_scenario(tmp_path, 10_000_000)
-    with pytest.raises(ValueError) as info:
+    with pytest.raises(ValueError, match="bodies need at least") as info:
         MultiRobotSimulationCore.from_yaml(path)
     message = str(info.value)
     assert message.startswith(f"{path}: entities[0].grid: 10,000,000 bodies need at least")

@@ -34,6 +34,38 @@ if TYPE_CHECKING:
 
 __all__ = ["AgentMissionApi"]
 
+_MAX_CHARGE_STEPS = 10_000_000
+"""Steps a charge to a level may take at most (beyond: the rate is too small to be meant)."""
+
+
+def _time_to_charge(battery: Any, to: float, agent: MissionAgent) -> float:
+    """Sim seconds of charging standing still that bring ``battery`` to ``to``: the whole
+    steps the battery's own per-step update (charge rate less drain over time, capped at
+    1) needs, counted with the same arithmetic.
+
+    Raises:
+        ValueError: for ``to`` outside [0, 1], or a battery that cannot reach it.
+    """
+    if isinstance(to, bool) or not isinstance(to, (int, float)) or not 0.0 <= to <= 1.0:
+        raise ValueError(f"agent.charge: to must be a state of charge in [0, 1], got {to!r}")
+    sim = agent.sim_core
+    dt = sim.params.timestep if sim is not None else 0.0
+    soc = float(battery.soc)
+    # BatteryPlugin.on_step's change of a robot standing still, with the same arithmetic
+    gain = battery.charge_rate * dt - battery.drain_per_second * dt
+    if soc >= to:
+        return 0.0
+    if not gain > 0:
+        raise ValueError(
+            f"agent.charge: {agent.name!r}'s battery drains {battery.drain_per_second}/s and "
+            f"charges {battery.charge_rate}/s, so it cannot reach {to} by charging"
+        )
+    steps = 0
+    while soc < to and steps < _MAX_CHARGE_STEPS:
+        soc = min(1.0, max(0.0, soc + gain))
+        steps += 1
+    return (steps - 0.5) * dt  # a wait ends at the first step it covers: exactly ``steps``
+
 
 class AgentMissionApi:
     """Mixin for Agent: ``await agent.move(...)``, ``pick``, ``drop``, ``wait``, ``charge``,
@@ -104,15 +136,20 @@ class AgentMissionApi:
         what = "agent.charge" if action_type == "charge" else "agent.wait"
         return self.submit(action, detached=detached, what=what)
 
-    def charge(self, duration: float) -> Any:
-        """Charge the battery for ``duration`` sim seconds.
+    def charge(self, duration: float | None = None, *, to: float | None = None) -> Any:
+        """Charge the battery for ``duration`` sim seconds, or until its state of charge
+        reaches ``to`` (in [0, 1]): the whole steps that take it there standing still, at
+        the battery's charge rate less its drain over time (a wait of 0 if it is there
+        already).
 
         Raises:
             ValueError: if the agent has no battery (charging would only wait), saying how to
-                give it one.
+                give it one; for not exactly one of ``duration`` and ``to``, a ``to`` outside
+                [0, 1], or a battery that cannot get there (it drains faster than it charges).
         """
         agent: MissionAgent = self  # type: ignore[assignment]  # mixed into Agent, a MissionAgent
-        if agent.battery_plugin is None:
+        battery = agent.battery_plugin
+        if battery is None:
             raise ValueError(
                 f"agent.charge: {agent!r} has no battery, so charging would only wait. Give it "
                 "one: in a scenario, 'plugins: [{type: battery, config: {initial_soc: 0.5}}]' "
@@ -120,6 +157,14 @@ class AgentMissionApi:
                 "{'initial_soc': 0.5})) or AgentSpawnParams(..., plugins=[{'type': "
                 "'battery'}]). To wait without charging, use agent.wait(duration)"
             )
+        if (duration is None) == (to is None):
+            raise ValueError(
+                "agent.charge: give a duration (charge(30.0)) or a level (charge(to=0.95)), "
+                f"not {'both' if to is not None else 'neither'}"
+            )
+        if to is not None:
+            return self.wait(_time_to_charge(battery, to, agent), action_type="charge")
+        assert duration is not None  # exactly one of the two was given
         return self.wait(duration, action_type="charge")
 
     def move_joints(self, targets: Any, **options: Any) -> Any:

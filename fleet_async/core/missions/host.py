@@ -43,6 +43,9 @@ class MissionHost(Protocol):
 
     def ensure_mission_runtime(self) -> MissionRuntime: ...
 
+    @property
+    def params(self) -> SimulationParams: ...
+
 
 class MissionAgent(Protocol):
     """An agent, as its mission commands see it."""
