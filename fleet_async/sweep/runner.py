@@ -102,6 +102,7 @@ def run_sweep(
     duration: float | None = None,
     robots_out: str | Path | None = None,
     checkpoint: str | Path | None = None,
+    unsafe: bool = False,
     on_progress: Callable[[SweepProgress], None] | None = None,
 ) -> SweepSummary:
     """Run every (grid point, seed) of ``plan`` on ``scenario``; write the table to ``out``.
@@ -117,9 +118,11 @@ def run_sweep(
         duration: Sim seconds per run (default: the scenario's).
         robots_out: Also write the per-robot table here.
         checkpoint: Branch every run from this checkpoint (``sim.save_state``): each run
-            builds the scenario, restores it, reseeds the generator with its seed and runs
-            ``duration`` more sim seconds. Workers read the file: on a cluster, it must be at
-            the same path on every node.
+            builds the scenario, restores it, reseeds it with its seed (``sim.reseed``: the
+            simulation's generator and every stream of ``sim.rng_for``) and runs ``duration``
+            more sim seconds. Workers read the file: on a cluster, it must be at the same path
+            on every node.
+        unsafe: Also read a format-1 checkpoint (a pickle: reading it runs any code it names).
         on_progress: Called with a :class:`SweepProgress` once at the start and after each run.
 
     Returns:
@@ -146,7 +149,7 @@ def run_sweep(
     )
     start = None if checkpoint is None else str(Path(checkpoint).resolve())
     todo = [
-        RunSpec(index, point, seed, scenario, duration, robots_table is not None, start)
+        RunSpec(index, point, seed, scenario, duration, robots_table is not None, start, unsafe)
         for index, point, seed in runs
         if index not in done
     ]
