@@ -31,6 +31,7 @@ from fleet_async.sweep.overrides import (
     is_nested,
     settable_keys,
 )
+from fleet_async.sweep.table import round_sim_times
 from fleet_async.tasks import run as run_missions
 
 if sys.version_info < (3, 11):  # anyio depends on the backport there
@@ -346,8 +347,11 @@ def _run_built(
     else:
         _run_scenario(sim, spec.duration)
     kpis.stop()
-    robots = [r.as_dict() for r in kpis.per_robot()] if spec.per_robot else None
-    return kpis.summary().as_dict(), robots
+    dt = sim.params.timestep
+    robots = (
+        [round_sim_times(r.as_dict(), dt) for r in kpis.per_robot()] if spec.per_robot else None
+    )
+    return round_sim_times(kpis.summary().as_dict(), dt), robots
 
 
 def execute_run(spec: RunSpec) -> RunResult:
