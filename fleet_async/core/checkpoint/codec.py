@@ -11,7 +11,7 @@ What the tree may hold:
 - the simulation and its objects, by reference (``{"sim": 0}``, ``{"obj": id}``), resolved
   against the simulation restored into; its random streams (``sim.rng_for``) by key;
 - other numpy generators, as their bit generator's state (PCG64, Philox, SFC64, MT19937);
-- members of enums and instances of classes defined in ``fleet_async`` itself (actions, poses,
+- members of enums and instances of classes defined in ``fleet_async.core`` (actions, poses,
   paths, controller parameters) and their methods (by name), rebuilt with ``object.__new__``
   and their attributes set, never through a constructor or ``__setstate__`` named by the file.
   An instance that appears twice (an action both running and timed) is written once and
@@ -44,7 +44,7 @@ _BIT_GENERATORS = {
     "SFC64": np.random.SFC64,
     "MT19937": np.random.MT19937,
 }
-_PACKAGE = "fleet_async."
+_PACKAGE = "fleet_async.core."  # the simulator's own value types; never interfaces, CLI, ...
 
 
 class CodecError(ValueError):
