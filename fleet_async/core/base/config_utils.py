@@ -24,6 +24,7 @@ import yaml
 
 from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import coerce_enum
+from fleet_async.core.base.yaml_scalars import ScalarRuleLoader
 
 __all__ = [
     "dataclass_from_dict",
@@ -66,7 +67,7 @@ def load_yaml_config(config_path: PathLike, *, allow_empty: bool = True) -> dict
         raise FileNotFoundError(f"Config file not found: {path} (looked for {path.resolve()})")
     try:
         with path.open(encoding="utf-8") as stream:
-            data = yaml.safe_load(stream)
+            data = yaml.load(stream, Loader=ScalarRuleLoader)  # data only, one scalar rule
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         problem = getattr(exc, "problem", None) or str(exc)
