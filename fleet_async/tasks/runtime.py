@@ -332,7 +332,8 @@ class Runtime:
     def mission_rng(self) -> np.random.Generator:
         """A generator for the current mission, derived from the seed and its key."""
         mission = self.kernel.require_current("sim.mission_rng")
-        return np.random.default_rng([self.sim.params.seed, 0x3A55, *mission.key])
+        # The simulation's seed sequence for this key: after sim.reseed it follows the new seed.
+        return np.random.default_rng(self.sim.seed_sequence(0x3A55, *mission.key))
 
 
 def _agent_then_seq(entry: tuple[int, int, ActionWait]) -> tuple[int, int]:

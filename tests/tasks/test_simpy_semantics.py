@@ -416,3 +416,20 @@ def test_a_mission_looping_in_python_is_named_with_its_line(backend):
         message = str(info.value)
         assert "mission 'spinner'" in message and "running Python code without awaiting" in message
         assert f"{__file__}:" in message and "in spinner" in message
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_missions_generator_follows_a_reseed(backend):
+    def draw(seed, reseed=None):
+        with MultiRobotSimulationCore(
+            SimulationParams(gui=False, monitor=False, target_rtf=0.0, seed=seed)
+        ) as sim:
+            if reseed is not None:
+                sim.reseed(reseed)
+
+            async def main():
+                return sim.mission_rng().random(3).tolist()
+
+            return fa.run(sim, main, backend=backend)
+
+    assert draw(0, reseed=7) == draw(7) != draw(0)
