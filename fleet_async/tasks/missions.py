@@ -407,27 +407,21 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
             if unhandled and kernel.on_unhandled is not None:
                 kernel.on_unhandled(event)
             continue
-        yield from _resume(kernel, event, callbacks)
+        for callback in callbacks:
+            if callback.__class__ is not Mission:
+                callback(event)
+                continue
+            guard = event.guard
+            if guard is not None and not guard(callback):
+                continue
+            value = event.raw_value
+            if not event.ok and not event.per_waiter:
+                value = waiter_copy(value)
+            answer = callback.step(not event.ok, value)
+            while answer is not PARKED:  # a non-sim await: the host loop serves it
+                answer = yield from _forward(kernel, callback, answer)
         if after is not None:
             after()
-
-
-@types.coroutine
-def _resume(kernel: Kernel, event: SimEvent, callbacks: list[Any]) -> Generator[Any, Any, None]:
-    """Resume the waiters of a processed ``event``, in order (dispatch's inner loop)."""
-    for callback in callbacks:
-        if callback.__class__ is not Mission:
-            callback(event)
-            continue
-        guard = event.guard
-        if guard is not None and not guard(callback):
-            continue
-        value = event.raw_value
-        if not event.ok and not event.per_waiter:
-            value = waiter_copy(value)
-        answer = callback.step(not event.ok, value)
-        while answer is not PARKED:  # a non-sim await: the host loop serves it
-            answer = yield from _forward(kernel, callback, answer)
 
 
 @types.coroutine
