@@ -231,6 +231,27 @@ def test_run_quiet_prints_nothing(script, scenario):
     assert result.stdout == ""
 
 
+def test_run_quiet_silences_the_missions_too(script):
+    # The warehouse's missions print a mission log; --quiet prints nothing at all.
+    warehouse = REPO / "examples" / "scenarios" / "warehouse.yaml"
+    result = cli(script, "run", warehouse, "--duration", "10", "--quiet")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+
+
+def test_view_runs_live_at_real_time_unless_told(tmp_path):
+    from fleet_async.cli.run import load_scenario
+
+    path = tmp_path / "s.yaml"
+    path.write_text("simulation: {gui: false}\nentities: []\n")
+    for rtf, expected in ((None, 1.0), (0.0, 0.0), (5.0, 5.0)):
+        with load_scenario(path, gui_on=False, rtf=rtf, live=True) as sim:
+            assert sim.params.target_rtf == expected
+    path.write_text("simulation: {gui: false, target_rtf: 3}\nentities: []\n")
+    with load_scenario(path, gui_on=False, rtf=None, live=True) as sim:
+        assert sim.params.target_rtf == 3.0
+
+
 def test_run_records_a_gif(script, scenario, tmp_path):
     out = tmp_path / "clips" / "run.gif"
     result = cli(
@@ -286,12 +307,12 @@ def test_run_record_without_pillow_explains_what_to_install(script, scenario, tm
         "1",
         "--record",
         tmp_path / "out.gif",
-        env={"PYTHONPATH": str(shadow.parent)},
+        env={"PYTHONPATH": os.pathsep.join([str(shadow.parent), os.environ.get("PYTHONPATH", "")])},
     )
     assert result.returncode == 2
     line = error_line(result.stderr)
     assert "needs Pillow" in line
-    assert 'pip install "fleet-async[record]"' in line
+    assert 'python -m pip install Pillow "imageio[pyav]"' in line
     assert not (tmp_path / "out.gif").exists()
 
 

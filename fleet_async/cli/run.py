@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import io
 import math
 import sys
 import time
@@ -129,7 +130,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--record",
         metavar="OUT",
         help="record the run to OUT: .gif (needs Pillow) or .mp4 (needs imageio with PyAV); "
-        'install both with: pip install "fleet-async[record]"',
+        'install both with: python -m pip install Pillow "imageio[pyav]"',
     )
     parser.add_argument(
         "--record-size",
@@ -191,7 +192,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--view",
         action="store_true",
         help="watch the run live in the browser viewer (traces to --trace, or to "
-        "SCENARIO.fatrace in the working directory); after the run the page stays served "
+        "SCENARIO.fatrace in the working directory), paced at the scenario's target_rtf or "
+        "real time (1.0) unless --rtf says otherwise; after the run the page stays served "
         "until Ctrl+C",
     )
     parser.add_argument(
@@ -204,7 +206,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quiet",
         action="store_true",
-        help="print nothing (no progress bar, no summary); errors still go to stderr",
+        help="print nothing (no progress bar, no summary, nothing the scenario's missions "
+        "print); errors still go to stderr",
     )
 
 
@@ -212,7 +215,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def load_scenario(
-    path: Path, gui_on: bool, rtf: float | None, *, drop_trace: bool = False
+    path: Path,
+    gui_on: bool,
+    rtf: float | None,
+    *,
+    drop_trace: bool = False,
+    live: bool = False,
 ) -> MultiRobotSimulationCore:
     """Build the simulation of the scenario file at ``path`` (as ``from_yaml`` does).
 
@@ -220,8 +228,11 @@ def load_scenario(
         path: The scenario YAML (flat or nested layout).
         gui_on: Value for ``gui``, replacing the scenario's.
         rtf: Value for ``target_rtf``; None keeps the scenario's with a GUI (0 if it sets
-            none) and runs headless runs as fast as possible.
+            none) or a live view (1.0, real time, if it sets none: a run as fast as possible
+            would end before a browser connects), and runs other headless runs as fast as
+            possible.
         drop_trace: Ignore the scenario's ``trace:`` section (the command line traces).
+        live: Someone watches the run as it happens (``--view``).
 
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
@@ -244,6 +255,9 @@ def load_scenario(
         settings["gui"] = gui_on
         if rtf is not None:
             settings["target_rtf"] = rtf
+        elif live:
+            if not settings.get("target_rtf"):  # unset or 0 (as fast as possible)
+                settings["target_rtf"] = 1.0
         elif gui_on:
             settings.setdefault("target_rtf", 0.0)
         else:  # nobody is watching: pacing to the wall clock would only slow the run down
@@ -284,7 +298,9 @@ def execute(args: argparse.Namespace) -> int:
     """Run the ``run`` command; return the exit code."""
     path = Path(args.scenario)
     try:
-        sim = load_scenario(path, args.gui, args.rtf, drop_trace=bool(args.trace or args.view))
+        sim = load_scenario(
+            path, args.gui, args.rtf, drop_trace=bool(args.trace or args.view), live=args.view
+        )
     except (ValueError, TypeError, OSError) as exc:
         raise CliError(str(exc)) from exc
     try:
@@ -391,6 +407,8 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     if bar is not None and bar.enabled:
         bar.start()
         sys.stdout, sys.stderr = bar.guard(sys.stdout), bar.guard(sys.stderr)
+    if args.quiet:  # what the missions print, too
+        sys.stdout = io.StringIO()
     try:
         with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C: summarise what ran
             outcome = run_scenario(sim, limit, backend=args.backend)

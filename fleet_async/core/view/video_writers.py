@@ -15,7 +15,10 @@ import numpy as np
 
 __all__ = ["INSTALL_HINT", "WRITERS", "GifWriter", "Mp4Writer", "import_or_explain"]
 
-INSTALL_HINT = 'pip install "fleet-async[record]"'
+INSTALL_HINT = (
+    'python -m pip install Pillow "imageio[pyav]" (or, in a fleet_async source checkout, '
+    'python -m pip install -e ".[record]")'
+)
 
 
 def import_or_explain(module: str, what: str) -> Any:
