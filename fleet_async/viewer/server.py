@@ -1,6 +1,7 @@
 """A small local HTTP server for the viewer page and one trace (standard library only).
 
-Routes: ``/`` the page, ``/trace.js`` ``/render.js`` ``/viewer.js`` ``/viewer.css`` its assets
+Routes: ``/`` the page, ``/trace.js`` ``/palette.js`` ``/timeline.js`` ``/panel.js`` ``/render.js``
+``/viewer.js`` ``/viewer.css`` its assets
 (package data in ``static/``), ``/trace`` the trace file, streamed in chunks. With
 ``follow=True`` (a run in progress, ``fleet-async run --view``) ``/trace`` keeps streaming what
 the writer appends until the trace's end record has been sent, so the page shows a live run.
@@ -27,6 +28,9 @@ logger = logging.getLogger(__name__)
 
 _ASSETS = {
     "/trace.js": "text/javascript",
+    "/palette.js": "text/javascript",
+    "/timeline.js": "text/javascript",
+    "/panel.js": "text/javascript",
     "/render.js": "text/javascript",
     "/viewer.js": "text/javascript",
     "/viewer.css": "text/css",

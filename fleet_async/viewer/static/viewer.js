@@ -1,5 +1,5 @@
 // The replay viewer: loads the trace as it streams in, plays it on a sim-time clock, draws it
-// top-down, and lists a selected robot's actions and events. A selected served vehicle (one
+// top-down, and shows a selected robot's timeline (timeline.js, panel.js), goal and path. A selected served vehicle (one
 // fleet masters send orders to) also shows its order, its task states and the commands it
 // received, and its route still to go is drawn on the canvas.
 //
@@ -17,6 +17,7 @@
 
   const data = new TraceData(traceName);
   const decoder = new TraceDecoder(data);
+  const timeline = new Timeline(data);
   const stage = $("stage"), grid = $("grid"), gl = $("gl"), overlay = $("overlay");
   // WebGL2 only on request or on a hardware GPU: software WebGL is far slower than the
   // Canvas2D pixel renderer at fleet sizes (see render.js).
@@ -40,10 +41,31 @@
 
   const view = { cx: 0, cy: 0, scale: 20, width: 800, height: 600, dpr: 1, userMoved: false };
   const clock = { t: 0, playing: false, speed: 1, last: null, follow: false, loop: params.get("loop") === "1" };
-  const ui = { selected: null, colorMode: "state", zrange: [-Infinity, Infinity], zAuto: true, error: null, done: false };
+  const ui = { selected: null, colorMode: "state", zrange: [-Infinity, Infinity], zAuto: true, error: null, done: false, labels: false };
+  const timelinePanel = new TimelinePanel(timeline, { filters: $("sel-filters"), list: $("sel-events"), count: $("sel-count"), doing: $("sel-doing") }, (t) => { setPlaying(false); seek(t); });
   const stats = { frames: 0, times: [], drawMs: [] };
   const debug = { skipGL: false, skipGrid: false, skipOverlay: false };
-  let statics = null, staticsCount = -1, dirty = true, layoutBodyCache = new Map();
+  let statics = null, staticsCount = -1, dirty = true, layoutBodyCache = new Map(), legendBodies = -1;
+  let activityCache = { version: -1, frames: new Map() };
+
+  // Per frame, [layout index, ACTIVITY code] of the robots doing something their flags do
+  // not say (palette.js robotState); only robots with events are looked at.
+  function activity(frame) {
+    if (activityCache.version !== data.version_) activityCache = { version: data.version_, frames: new Map() };
+    let list = activityCache.frames.get(frame);
+    if (list) return list.length ? list : null;
+    list = [];
+    const bodies = layoutBodies(frame.layout);
+    for (let i = 0; i < frame.layout.n; i++) {
+      const b = bodies[i];
+      if (!isRobot(b) || !b.events.length) continue;
+      const code = timeline.activityAt(b.id, frame.step).code;
+      if (code) list.push([i, code]);
+    }
+    if (activityCache.frames.size > 256) activityCache.frames.clear();
+    activityCache.frames.set(frame, list);
+    return list.length ? list : null;
+  }
 
   // ----- loading ----------------------------------------------------------------------------
 
@@ -102,6 +124,7 @@
       $("zmax").placeholder = data.zBounds[1].toFixed(2);
     }
     if (!view.userMoved) fit();
+    if (data.bodies.size !== legendBodies) { legendBodies = data.bodies.size; renderLegend($("legend"), data, ui.colorMode); }
     app.dataset.frames = String(data.frames.length);
     app.dataset.duration = String(data.duration);
     if (app.dataset.state === "loading" && data.frames.length) app.dataset.state = ui.done ? "ready" : "streaming";
@@ -234,7 +257,7 @@
     const alpha = f0 && f1 ? Math.min(Math.max((clock.t - f0.t) / (f1.t - f0.t || 1), 0), 1) : 0;
     if (!debug.skipGrid) drawGrid();
     if (!debug.skipGL) renderer.draw(view, {
-      statics: staticScene(), frame0: f0, frame1: f1, alpha, zrange: zrange(), colorMode: ui.colorMode, layoutBodies,
+      statics: staticScene(), frame0: f0, frame1: f1, alpha, zrange: zrange(), colorMode: ui.colorMode, layoutBodies, activity,
     });
     if (!debug.skipOverlay) drawOverlay(f0, f1, alpha);
     const simTime = f0 ? clock.t : 0;
@@ -348,11 +371,18 @@
         ctx.fillText(`\u00d7${count}`, p.x + 6, p.y - 6);
       }
     }
+    if (ui.labels && f0) drawNames(ctx, f0, f1, alpha);
     drawnRoute = null;
+    drawnGoal = null;
     if (ui.selected === null) { app.dataset.routeNodes = ""; return; }
     const pose = bodyPose(f0, f1, alpha, ui.selected);
     if (!pose) { app.dataset.routeNodes = ""; return; }
     drawRoute(ctx, pose);
+    if (f0) {
+      const span = timeline.activityAt(ui.selected, f0.step).span;
+      const target = span && span.object !== undefined ? bodyPose(f0, f1, alpha, span.object) : null;
+      drawnGoal = drawGoal(ctx, project, pose, span, target);
+    }
     const b = data.bodies.get(ui.selected);
     const s = b && b.shapeInfo;
     const r = Math.max(8, (s ? (s.radius || Math.hypot(s.half[0], s.half[1])) : 0.1) * view.scale + 4);
@@ -360,7 +390,21 @@
     ctx.strokeStyle = "#111"; ctx.lineWidth = 2;
     ctx.beginPath(); ctx.arc(p.x, p.y, r, 0, 2 * Math.PI); ctx.stroke();
     ctx.font = "12px sans-serif"; ctx.fillStyle = "#111";
-    ctx.fillText(b && b.name ? b.name : `#${ui.selected}`, p.x + r + 3, p.y - r);
+    ctx.fillText(displayName(data, ui.selected), p.x + r + 3, p.y - r);
+  }
+
+  let drawnGoal = null;   // the goal and path drawn last, for tests (viewer.goal())
+
+  function drawNames(ctx, f0, f1, alpha) {
+    const bodies = layoutBodies(f0.layout), items = [];
+    const [z0, z1] = zrange();
+    for (let i = 0; i < f0.layout.n; i++) {
+      const b = bodies[i];
+      if (!b || b.kind !== "agent" || b.id === ui.selected) continue;  // the selection has its own
+      const q = bodyPose(f0, f1, alpha, b.id);
+      if (q && q.z >= z0 && q.z <= z1) items.push([project(q.x, q.y), displayName(data, b.id)]);
+    }
+    app.dataset.labels = String(drawLabels(ctx, items, view.width, view.height, 400));
   }
 
   // A served vehicle's route still to go at the clock's time: from the robot through its
@@ -445,18 +489,6 @@
     return ids.length <= 8 ? ids.join(" ") : `${ids.slice(0, 3).join(" ")} … ${ids.slice(-2).join(" ")} (${ids.length})`;
   }
 
-  function describeVehicleState(d) {
-    const parts = [d.order_id ? `order ${d.order_id}/${d.order_update}` : "no order"];
-    if (d.last_node) parts.push(`last node ${d.last_node}`);
-    const nodes = d.nodes || [];
-    parts.push(nodes.length ? `${nodes.length} node${nodes.length > 1 ? "s" : ""} to go` : "nothing to go");
-    const tasks = (d.tasks || []).map(([id, , status]) => `${id} ${status}`);
-    if (tasks.length) parts.push(`tasks ${tasks.join(", ")}`);
-    if (d.paused) parts.push("paused");
-    if (d.errors && d.errors.length) parts.push(`${d.errors.length} error${d.errors.length > 1 ? "s" : ""}`);
-    return `vehicle state: ${parts.join(", ")}`;
-  }
-
   function describeCommand(c) {
     const cmd = c.command || {};
     const tasksOf = (list) => (list || []).map((k) => `${k.kind} ${k.task_id}`).join(", ");
@@ -475,15 +507,6 @@
     return String(cmd.type);
   }
 
-  function describeEvent(e) {
-    const d = e.data || {};
-    if (e.kind === "vehicle_state") return describeVehicleState(d);
-    if (e.kind === "action_started") return `${d.action} started`;
-    if (e.kind === "action_ended") return `${d.action} ${d.status}${d.reason ? ": " + d.reason : ""}`;
-    const rest = Object.entries(d).map(([k, v]) => `${k}=${typeof v === "object" ? JSON.stringify(v) : v}`).join(" ");
-    return `${e.kind}${rest ? " " + rest : ""}`;
-  }
-
   function updateSelection() {
     const panel = $("details");
     const wasHidden = panel.hidden;
@@ -493,30 +516,9 @@
     if (panel.hidden !== wasHidden) resize();
     if (ui.selected === null) return;
     const b = data.bodies.get(ui.selected);
-    $("sel-name").textContent = b ? `${b.name || "(unnamed)"}  #${b.id}` : `#${ui.selected}`;
-    $("sel-kind").textContent = b ? `${b.kind} · ${b.class}` : "";
-    const list = $("sel-events");
-    const items = [];
-    const events = b ? b.events : [];
-    for (const e of events) items.push({ t: e.t, text: describeEvent(e), kind: e.kind });
-    let collisions = 0;
-    for (const c of data.collisions) {
-      if (c.a !== ui.selected && c.b !== ui.selected) continue;
-      if (collisions++ > 200) break;
-      const other = c.a === ui.selected ? c.b : c.a;
-      const ob = data.bodies.get(other);
-      items.push({ t: c.step * data.timestep, text: `collision ${c.started ? "started" : "ended"} with ${ob && ob.name ? ob.name : "#" + other}`, kind: "collision" });
-    }
-    items.sort((x, y) => x.t - y.t);
-    list.replaceChildren(...items.map((it) => {
-      const li = document.createElement("li");
-      li.className = it.kind;
-      li.dataset.t = String(it.t);
-      li.textContent = `${it.t.toFixed(2)} s  ${it.text}`;
-      li.onclick = () => { setPlaying(false); seek(it.t); };
-      return li;
-    }));
-    $("sel-count").textContent = `${items.filter((x) => x.kind.startsWith("action")).length} action events, ${collisions} collision events`;
+    $("sel-name").textContent = `${displayName(data, ui.selected)}  #${ui.selected}`;
+    $("sel-kind").textContent = b ? `${b.kind}${objectKind(b) ? " · " + objectKind(b) : ""} · ${b.class}` : "";
+    timelinePanel.show(ui.selected, data.version_);
     updateVehicle(true);
   }
 
@@ -608,7 +610,9 @@
     if (!p) { $("sel-pose").textContent = "not in the scene at this time"; return; }
     const fl = p.flags || 0;
     const colliding = f0 && f0.colliding.includes(ui.selected);
-    const state = fl & 4 ? "failed" : fl & 2 ? "carrying" : fl & 1 ? "moving" : "idle";
+    const b = data.bodies.get(ui.selected);
+    const state = isRobot(b) ? robotState(fl, timeline.activityAt(ui.selected, f0.step).code) : objectKind(b) || b.kind;
+    if (isRobot(b)) timelinePanel.doing(ui.selected, f0.step, state); else $("sel-doing").textContent = "";
     $("sel-pose").textContent = `x ${p.x.toFixed(2)}  y ${p.y.toFixed(2)}  z ${p.z.toFixed(2)} m  yaw ${((p.yaw * 180) / Math.PI).toFixed(1)}°  ${state}${colliding ? ", colliding" : ""}`;
     app.dataset.selectedState = state;
     void i;
@@ -641,7 +645,9 @@
   $("speed").onchange = () => { clock.speed = parseFloat($("speed").value); };
   $("scrub").oninput = () => { seek(parseFloat($("scrub").value)); };
   $("fit").onclick = () => { view.userMoved = false; fit(); };
-  $("colour").onchange = () => { ui.colorMode = $("colour").value; dirty = true; };
+  $("colour").onchange = () => { setColorMode($("colour").value); };
+  $("labels").onchange = () => { ui.labels = $("labels").checked; dirty = true; };
+  function setColorMode(m) { ui.colorMode = m; $("colour").value = m; renderLegend($("legend"), data, m); dirty = true; render(); }
   for (const id of ["zmin", "zmax"]) $(id).oninput = () => { dirty = true; };
   $("close-details").onclick = () => select(null);
   document.addEventListener("keydown", (e) => {
@@ -671,6 +677,7 @@
     // Colour of the bodies layer at CSS pixel (x, y) of the stage: [r, g, b, a], 0..255.
     pixelAt: (x, y) => renderer.pixelAt(x * view.dpr, y * view.dpr),
     stateColours: () => ({ ...STATE_COLOURS }),
+    objectColours: () => ({ ...OBJECT_COLOURS }),
     // The route drawn for the selected served vehicle (null if none): vehicle, order_id, from
     // (the robot) and points (its nodes still to go), each with world x, y and CSS px, py.
     route: () => (drawnRoute ? JSON.parse(JSON.stringify(drawnRoute)) : null),
@@ -679,7 +686,13 @@
     overlayPixelAt: (x, y) => Array.from(overlay.getContext("2d").getImageData(Math.round(x * view.dpr), Math.round(y * view.dpr), 1, 1).data),
     poseOf: (id) => { const i = frameIndex(); return bodyPose(i >= 0 ? data.frames[i] : null, null, 0, id); },
     setZRange: (lo, hi) => { $("zmin").value = lo === null ? "" : String(lo); $("zmax").value = hi === null ? "" : String(hi); dirty = true; render(); },
-    setColorMode: (m) => { ui.colorMode = m; $("colour").value = m; dirty = true; render(); },
+    setColorMode,
+    setLabels: (on) => { ui.labels = !!on; $("labels").checked = ui.labels; dirty = true; render(); return ui.labels; },
+    setFilter: (kind, on) => { timelinePanel.setShown(kind, !!on); updateSelection(); return [...timelinePanel.shown]; },
+    timeline: (id) => timeline.rows(id === undefined ? ui.selected : id, new Set(Object.keys(TIMELINE_KINDS))).map((r) => ({ kind: r.kind, t: r.t, t1: r.t1, text: r.text })),
+    displayName: (id) => displayName(data, id),
+    legend: () => legendItems(data, ui.colorMode).map((it) => it.text),
+    goal: () => (drawnGoal ? JSON.parse(JSON.stringify(drawnGoal)) : null),
     state: () => ({ simTime: clock.t, frame: frameIndex(), frames: data.frames.length, playing: clock.playing, selected: ui.selected, error: ui.error, done: ui.done, bodies: data.bodies.size, renderer: renderer.kind, view: { ...view } }),
     stats: () => ({ frames: stats.frames, times: stats.times.slice(), drawMs: stats.drawMs.slice() }),
     resetStats: () => { stats.frames = 0; stats.times.length = 0; stats.drawMs.length = 0; },
