@@ -62,9 +62,7 @@ def record_warehouse(trace: Path) -> Path:
     config = load_yaml_config(scenario)
     config["simulation"].update(gui=False, target_rtf=0.0)
     config["trace"] = str(trace)
-    sim = MultiRobotSimulationCore.from_dict(
-        config, source=str(scenario), base_dir=scenario.parent
-    )
+    sim = MultiRobotSimulationCore.from_dict(config, source=str(scenario), base_dir=scenario.parent)
     try:
         with contextlib.redirect_stdout(io.StringIO()):  # the missions' log
             run_scenario(sim)
@@ -73,8 +71,16 @@ def record_warehouse(trace: Path) -> Path:
     return trace
 
 
-def take_screenshots(trace: Path, out_dir: Path, size: tuple[int, int] = (1400, 860)) -> Screenshots:
+def take_screenshots(
+    trace: Path, out_dir: Path, page: Any = None, size: tuple[int, int] = (1400, 860)
+) -> Screenshots:
     """Open ``trace`` in the viewer, select ``picker_0`` and save one PNG per moment.
+
+    Args:
+        trace: A trace of the warehouse shift (:func:`record_warehouse`).
+        out_dir: Where the PNG files go (created if missing).
+        page: A playwright page to use (a test's); None starts headless Chromium.
+        size: The page's size in CSS pixels.
 
     Raises:
         ImportError, FileNotFoundError: without playwright or Chromium (from launch_chromium).
@@ -84,32 +90,39 @@ def take_screenshots(trace: Path, out_dir: Path, size: tuple[int, int] = (1400, 
     server = ViewerServer(trace, port=0)
     server.start_background()
     try:
-        with launch_chromium(viewport=size) as page:
-            page.goto(server.url)
-            page.wait_for_function(_READY, timeout=120_000)
-            error = page.evaluate("viewer.state().error")
-            if error:
-                raise RuntimeError(f"the viewer could not show {trace}: {error}")
-            robot = page.evaluate(
-                f"[...viewer.data.bodies.values()].filter((b) => b.name === {ROBOT!r})"
-                ".map((b) => b.id)[0]"
-            )
-            if robot is None:
-                raise RuntimeError(f"{trace}: no body called {ROBOT!r}")
-            page.evaluate(f"viewer.select({robot}); viewer.setLabels(true)")
-            files, doing = [], []
-            for name, t in MOMENTS:
-                page.evaluate(f"viewer.seek({t})")
-                page.wait_for_function(
-                    f"Math.abs(Number(document.getElementById('app').dataset.simTime) - {t}) < 0.2"
-                )
-                doing.append(page.inner_text("#sel-doing"))
-                path = out_dir / f"viewer_{name}.png"
-                page.screenshot(path=str(path))
-                files.append(path)
-            timeline = page.evaluate("viewer.timeline()")
+        if page is not None:
+            page.set_viewport_size({"width": size[0], "height": size[1]})
+            return _shoot(page, server.url, trace, out_dir)
+        with launch_chromium(viewport=size) as own:
+            return _shoot(own, server.url, trace, out_dir)
     finally:
         server.stop()
+
+
+def _shoot(page: Any, url: str, trace: Path, out_dir: Path) -> Screenshots:
+    page.goto(url)
+    page.wait_for_function(_READY, timeout=120_000)
+    error = page.evaluate("viewer.state().error")
+    if error:
+        raise RuntimeError(f"the viewer could not show {trace}: {error}")
+    robot = page.evaluate(
+        f"[...viewer.data.bodies.values()].filter((b) => b.name === {ROBOT!r}).map((b) => b.id)[0]"
+    )
+    if robot is None:
+        raise RuntimeError(f"{trace}: no body called {ROBOT!r}")
+    page.evaluate(f"viewer.select({robot}); viewer.setLabels(true)")
+    files, doing = [], []
+    for name, t in MOMENTS:
+        page.evaluate(f"viewer.seek({t})")
+        page.wait_for_function(
+            f"Math.abs(Number(document.getElementById('app').dataset.simTime) - {t}) < 0.2"
+        )
+        doing.append(page.inner_text("#sel-doing"))
+        path = out_dir / f"viewer_{name}.png"
+        page.screenshot(path=str(path))
+        files.append(path)
+    timeline = page.evaluate("viewer.timeline()")
+    page.evaluate("viewer.setLabels(false); viewer.select(null)")
     return Screenshots(files, int(robot), timeline, doing)
 
 

@@ -57,16 +57,17 @@ const OBJECT_COLOURS = {
 };
 const OBJECT_HELP = { rack: "racks, shelves", station: "stations, tables", tote: "totes, loads (pickable)", charger: "chargers", scenery: "other scenery" };
 
-// What kind of object a body is, for its colour: from its name and class, then pickable.
+// What kind of object a body is, for its colour: from its name and class (charger, rack or
+// shelf, station or table), else a pickable body or one named like a load is a tote.
 function objectKind(b) {
   if (!b || b.kind === "agent") return null;
   if (b.objectKind) return b.objectKind;
   const text = `${b.name || ""} ${b.class || ""}`;
   let kind = "scenery";
   if (/charg/i.test(text)) kind = "charger";
-  else if (b.pickable || /tote|pallet|parcel|\bbox|bin_|load/i.test(text)) kind = "tote";
   else if (/shelf|rack/i.test(text)) kind = "rack";
   else if (/station|table|desk|dock|conveyor/i.test(text)) kind = "station";
+  else if (b.pickable || /tote|pallet|parcel|\bbox|bin_|load/i.test(text)) kind = "tote";
   b.objectKind = kind;
   return kind;
 }

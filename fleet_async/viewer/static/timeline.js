@@ -94,7 +94,8 @@ class Timeline {
     const at = s.goal ? ` at (${s.goal[0].toFixed(1)}, ${s.goal[1].toFixed(1)})` : "";
     const object = s.object !== undefined ? ` ${this.name(s.object)}` : "";
     let text;
-    if (s.kind === "wait") text = s.charging ? `charging${s.duration ? ` ${s.duration} s` : ""}` : `${s.action}${s.label && s.label !== "idle" ? " " + s.label : ""}${s.duration !== undefined ? ` ${s.duration} s` : ""}`;
+    const lasting = s.duration !== undefined ? ` ${s.duration} s` : "";
+    if (s.kind === "wait") text = s.charging ? `charging${lasting}` : `waiting${s.label && s.label !== "idle" ? " (" + s.label + ")" : ""}${lasting}`;
     else text = `${s.action}${object}${at}`;
     if (s.status !== "completed") text += ` · ${s.status}${s.reason ? ": " + s.reason : ""}`;
     if (s.task) text += ` · ${s.task}`;

@@ -29,17 +29,14 @@ def _xy(value: Any) -> list[float] | None:
     return [round(x, 3), round(y, 3)]
 
 
-def _object_id(target: Any, objects: Iterable[Any]) -> int | None:
-    """The simulation's object id of ``target``: a body handle, or a PyBullet body id."""
+def _target(target: Any, objects: Iterable[Any]) -> Any:
+    """The body ``target`` names: a body handle, or a PyBullet body id; None otherwise."""
     if target is None:
         return None
-    object_id = getattr(target, "object_id", None)
-    if object_id is not None:
-        return int(object_id)
+    if getattr(target, "object_id", None) is not None:
+        return target
     if isinstance(target, int):
-        for obj in objects:
-            if getattr(obj, "body_id", None) == target:
-                return int(obj.object_id)
+        return next((o for o in objects if getattr(o, "body_id", None) == target), None)
     return None
 
 
@@ -67,10 +64,9 @@ def describe_start(action: Any, objects: Iterable[Any]) -> dict[str, Any]:
         if goal is not None:
             data["goal"] = goal
             break
-    target = getattr(action, "target_object_id", None)
-    object_id = _object_id(target, objects)
-    if object_id is not None:
-        data["object"] = object_id
+    target = _target(getattr(action, "target_object_id", None), objects)
+    if target is not None:
+        data["object"] = int(target.object_id)
         if "goal" not in data and hasattr(target, "get_pose"):
             data["goal"] = _xy(target.get_pose())
     duration = getattr(action, "duration", None)
