@@ -1,8 +1,8 @@
 """A small local HTTP server for the viewer page and one trace (standard library only).
 
-Routes: ``/`` the page, ``/trace.js`` ``/palette.js`` ``/timeline.js`` ``/panel.js`` ``/render.js``
-``/viewer.js`` ``/viewer.css`` its assets
-(package data in ``static/``), ``/trace`` the trace file, streamed in chunks. With
+Routes: ``/`` the page, its scripts (``/trace.js`` ``/palette.js`` ``/timeline.js``
+``/panel.js`` ``/vehicle.js`` ``/render.js`` ``/viewer.js``) and ``/viewer.css`` (package data
+in ``static/``), ``/trace`` the trace file, streamed in chunks. With
 ``follow=True`` (a run in progress, ``fleet-async run --view``) ``/trace`` keeps streaming what
 the writer appends until the trace's end record has been sent, so the page shows a live run.
 """
@@ -31,6 +31,7 @@ _ASSETS = {
     "/palette.js": "text/javascript",
     "/timeline.js": "text/javascript",
     "/panel.js": "text/javascript",
+    "/vehicle.js": "text/javascript",
     "/render.js": "text/javascript",
     "/viewer.js": "text/javascript",
     "/viewer.css": "text/css",
