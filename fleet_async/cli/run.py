@@ -147,6 +147,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
     )
     parser.add_argument(
+        "--record-renderer",
+        choices=("topdown", "pybullet"),
+        default="topdown",
+        help="how --record draws: topdown (the default: every body's footprint seen from "
+        "above, framed on the robots and what they work with; many times faster) or pybullet "
+        "(PyBullet's software renderer: perspective views, any --camera)",
+    )
+    parser.add_argument(
         "--backend",
         choices=("asyncio", "trio"),
         default="asyncio",
@@ -321,9 +329,38 @@ def _set_camera(sim: MultiRobotSimulationCore, mode: str) -> None:
 def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> None:
     width, height = args.record_size
     try:
-        sim.start_recording(args.record, width=width, height=height, fps=args.record_fps)
+        renderer = args.record_renderer
+        if (
+            renderer == "topdown"
+            and args.camera
+            and args.camera not in ("auto", "top_down", "fleet")
+        ):
+            renderer = "pybullet"  # a perspective camera was asked for: PyBullet draws it
+        recorder = sim.start_recording(
+            args.record, width=width, height=height, fps=args.record_fps, renderer=renderer
+        )
     except (ImportError, ValueError) as exc:
         raise CliError(f"--record {args.record}: {exc}") from exc
+    if not args.quiet and not sys.stderr.isatty():  # a terminal has the progress bar
+        _report_recording(sim, recorder)
+
+
+def _report_recording(sim: MultiRobotSimulationCore, recorder: Any, every: float = 5.0) -> None:
+    """Where the bar cannot be drawn (a log, CI): a line on stderr every ``every`` wall s."""
+    state = {"next": time.perf_counter() + every}
+
+    def report(**_: Any) -> None:
+        now = time.perf_counter()
+        if now >= state["next"] and recorder.is_recording:
+            state["next"] = now + every
+            print(
+                f"recording {recorder.output}: {recorder.frame_count} frames, "
+                f"{sim.sim_time:.1f} s of sim time",
+                file=sys.stderr,
+                flush=True,
+            )
+
+    sim.events.on(SimEvents.POST_STEP, report)
 
 
 def _start_trace(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> None:
@@ -417,6 +454,8 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     wall = time.perf_counter() - wall0
     if bar is not None:
         bar.finish(sim.sim_time - start_time)
+    if args.record and not args.quiet:
+        print(f"saving {args.record} ...", file=sys.stderr, flush=True)
     saved = sim.stop_recording() if args.record else None
     trace = sim.stop_trace()
     if args.save_state:
