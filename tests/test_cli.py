@@ -759,3 +759,28 @@ def test_view_serves_the_page_and_the_trace(script, scenario, tmp_path):
         finally:
             proc.send_signal(signal.SIGINT)
             assert proc.wait(timeout=30) == 0
+
+
+def test_per_robot_rows_show_shared_names_with_their_ids():
+    from fleet_async.cli.run import _shared_names_with_ids
+
+    rows = [{"robot": "twin", "object_id": 3}, {"robot": "twin", "object_id": 4}]
+    rows.append({"robot": "solo", "object_id": 5})
+    assert [r["robot"] for r in _shared_names_with_ids(rows)] == ["twin#3", "twin#4", "solo"]
+
+
+def test_recording_progress_lines_where_stderr_is_not_a_terminal(scenario, tmp_path, capsys):
+    from fleet_async.cli.run import _report_recording
+
+    sim = load_scenario(scenario, gui_on=False, rtf=0.0)
+    try:
+        recorder = sim.start_recording(tmp_path / "r.gif", width=64, height=48, renderer="topdown")
+        _report_recording(sim, recorder, every=0.0)
+        for _ in range(3):
+            sim.step_once()
+        sim.stop_recording()
+    finally:
+        sim.close()
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == f"recording {tmp_path / 'r.gif'}: 2 frames, 0.1 s of sim time"
+    assert len(lines) == 3

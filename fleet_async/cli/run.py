@@ -360,7 +360,7 @@ def _report_recording(sim: MultiRobotSimulationCore, recorder: Any, every: float
                 flush=True,
             )
 
-    sim.events.on(SimEvents.POST_STEP, report)
+    sim.events.on(SimEvents.POST_STEP, report, priority=101)  # after the recorder (100)
 
 
 def _start_trace(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> None:
@@ -406,6 +406,18 @@ class StepWatcher:
                 self._sleep(1.0 / sim.params.gui_min_fps)
                 gui.handle_keyboard(sim)
         sim.update_monitor()
+
+
+def _shared_names_with_ids(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows whose robot name is shared (Python allows that) say ``name#object_id``, as the
+    trace viewer does."""
+    counts: dict[Any, int] = {}
+    for row in rows:
+        counts[row["robot"]] = counts.get(row["robot"], 0) + 1
+    return [
+        {**row, "robot": f"{row['robot']}#{row['object_id']}"} if counts[row["robot"]] > 1 else row
+        for row in rows
+    ]
 
 
 def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | None:
@@ -471,7 +483,7 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
             )
         )
         if args.per_robot:
-            robots = [r.as_dict() for r in kpis.per_robot()]
+            robots = _shared_names_with_ids([r.as_dict() for r in kpis.per_robot()])
             print(f"\nper robot:\n{format_table(robots, RobotKpis.columns())}")
     if live is not None:
         live_view.serve_until_interrupted(live, keep=outcome is not None)

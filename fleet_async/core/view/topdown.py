@@ -125,7 +125,8 @@ class TopDownRenderer:
             return
         robots = [(x, y) for obj, _, x, y, _, _ in bodies if obj.is_agent]
         if robots:
-            self._robots_at = tuple(float(v) for v in np.median(np.asarray(robots), axis=0))
+            mx, my = np.median(np.asarray(robots), axis=0)
+            self._robots_at = (float(mx), float(my))
         arr = np.asarray(points, dtype=np.float64)
         now = np.array(
             [
