@@ -5,6 +5,8 @@ Chromium, the page driven through its API and read back from the DOM and the pix
 from __future__ import annotations
 
 import concurrent.futures
+import os
+from pathlib import Path
 
 import pytest
 
@@ -167,7 +169,10 @@ def test_warehouse_screenshots_and_the_first_pick_names_its_order_and_object(
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
         trace = pool.submit(record_warehouse, tmp_path / "warehouse.fatrace").result()
     reader = TraceReader(trace)
-    shots = take_screenshots(trace, tmp_path / "shots", page=browser_page)
+    # CI keeps them where FLEET_ASYNC_SCREENSHOT_DIR points (an artifact folder), else a
+    # temporary folder; the docs' copies come from the command above.
+    out = Path(os.environ.get("FLEET_ASYNC_SCREENSHOT_DIR") or tmp_path / "shots")
+    shots = take_screenshots(trace, out, page=browser_page)
     browser_page.set_viewport_size({"width": 1200, "height": 760})  # the session's size
     assert reader.bodies[shots.robot_id]["name"] == "picker_0"
     picks = [r for r in shots.timeline if r["text"].startswith("PickAction")]
