@@ -122,7 +122,8 @@ def test_run_simulation_resumes_a_paused_simulation(sim, monkeypatch):
 
 
 def test_collision_detection_method_reports_the_method_in_force():
-    closest, contact = CollisionDetectionMethod.CLOSEST_POINTS, CollisionDetectionMethod.CONTACT_POINTS
+    closest = CollisionDetectionMethod.CLOSEST_POINTS
+    contact = CollisionDetectionMethod.CONTACT_POINTS
     assert SimulationParams(gui=False).collision_detection_method is closest
     assert SimulationParams(gui=False, physics=True).collision_detection_method is contact
     assert SimulationParams.from_dict({"physics": True}).collision_detection_method is contact
