@@ -14,7 +14,7 @@ The simulation is headless (``pybullet.DIRECT``), unpaced, with timestep 0.1 s a
 override the ``fleet_sim_params`` fixture to change that. Limit backends with
 ``@pytest.mark.parametrize("fleet_backend", ["asyncio"])``. The plugin is registered through
 the ``pytest11`` entry point, so installing fleet-async is enough; the trio variant needs trio
-(``pip install "fleet-async[trio]"``) and is skipped, with that reason, without it.
+(``python -m pip install -e ".[trio]"``) and is skipped, with that reason, without it.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ __all__ = ["fleet_backend", "fleet_sim", "fleet_sim_params", "fleet_sim_until", 
 
 _NO_TRIO = pytest.mark.skipif(
     importlib.util.find_spec("trio") is None,
-    reason='trio is not installed: pip install "fleet-async[trio]" to run the trio variant',
+    reason='trio is not installed: python -m pip install -e ".[trio]" to run the trio variant',
 )
 
 

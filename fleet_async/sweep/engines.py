@@ -26,7 +26,7 @@ __all__ = ["ENGINES", "Engine", "InlineEngine", "PoolEngine", "RayEngine", "make
 logger = logging.getLogger(__name__)
 
 RAY_MISSING = (
-    "the Ray engine needs Ray, which is not installed: pip install 'fleet-async[ray]' "
+    "the Ray engine needs Ray, which is not installed: python -m pip install -e '.[ray]' "
     "(or run on the local process pool: --engine pool)"
 )
 

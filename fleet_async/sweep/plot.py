@@ -19,7 +19,7 @@ from fleet_async.sweep.table import cell_text
 
 __all__ = ["PLOT_MISSING", "SeriesPoint", "plot_kpi", "require_matplotlib", "series"]
 
-PLOT_MISSING = "--plot needs matplotlib, which is not installed: pip install 'fleet-async[plot]'"
+PLOT_MISSING = "--plot needs matplotlib, which is not installed: python -m pip install -e '.[plot]'"
 
 
 def require_matplotlib() -> Any:

@@ -105,7 +105,7 @@ def run(
     if backend == "trio" and importlib.util.find_spec("trio") is None:
         raise ModuleNotFoundError(
             'fleet_async.run(backend="trio") needs trio, which is not installed: '
-            'pip install "fleet-async[trio]"',
+            'python -m pip install -e ".[trio]" (from a clone)',
             name="trio",
         )
     options = dict(until=until, then=then, on_deadlock=on_deadlock, watchdog=watchdog)

@@ -2,7 +2,7 @@
 
 Uses Debian's ``chromium`` package (``/usr/bin/chromium``, or ``$FLEET_ASYNC_CHROMIUM``);
 it never downloads a browser (no ``playwright install``). Needs the ``viewer-test`` extra:
-``pip install "fleet-async[viewer-test]"``.
+``python -m pip install -e ".[viewer-test]"``.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ def launch_chromium(viewport: tuple[int, int] = (1280, 800)) -> Iterator[Any]:
         from playwright.sync_api import sync_playwright  # an optional extra
     except ImportError as exc:
         raise ImportError(
-            'driving Chromium needs playwright: pip install "fleet-async[viewer-test]"'
+            'driving Chromium needs playwright: python -m pip install -e ".[viewer-test]"'
         ) from exc
     executable = chromium_path()
     if executable is None:

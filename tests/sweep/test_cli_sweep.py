@@ -160,8 +160,8 @@ def test_failed_runs_are_rows_and_exit_1(script, tmp_path):
 @pytest.mark.parametrize(
     ("module", "args", "extra"),
     [
-        ("matplotlib", ["--plot", "kpi.png"], "fleet-async[plot]"),
-        ("ray", ["--engine", "ray"], "fleet-async[ray]"),
+        ("matplotlib", ["--plot", "kpi.png"], ".[plot]"),
+        ("ray", ["--engine", "ray"], ".[ray]"),
     ],
 )
 def test_a_missing_extra_is_named_before_anything_runs(
@@ -181,7 +181,7 @@ def test_a_missing_extra_is_named_before_anything_runs(
         tmp=tmp_path,
     )
     assert result.returncode == 2
-    assert f"pip install '{extra}'" in error_line(result.stderr)
+    assert f"pip install -e '{extra}'" in error_line(result.stderr)
     assert not out.exists()
 
 

@@ -556,7 +556,7 @@ def test_an_unknown_or_missing_backend_is_a_clear_error(monkeypatch):
         monkeypatch.setattr(
             importlib.util, "find_spec", lambda name, *a: None if name == "trio" else real(name, *a)
         )
-        with pytest.raises(ModuleNotFoundError, match=r'pip install "fleet-async\[trio\]"'):
+        with pytest.raises(ModuleNotFoundError, match=r'pip install -e "\.\[trio\]"'):
             fa.run(sim, main, backend="trio")
         assert sim.step_count == 0  # nothing ran
 

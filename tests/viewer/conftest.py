@@ -37,7 +37,7 @@ def browser_page() -> Iterator[Any]:
     try:
         import playwright.sync_api  # noqa: F401  # only checking that it is installed
     except ImportError:
-        _no_browser('playwright is not installed: pip install "fleet-async[viewer-test]"')
+        _no_browser('playwright is not installed: python -m pip install -e ".[viewer-test]"')
     from fleet_async.viewer.browser import chromium_path, launch_chromium
 
     if chromium_path() is None:
