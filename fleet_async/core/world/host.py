@@ -69,6 +69,9 @@ class WorldBody(AttachedBody, PendingHandle, Protocol):
     def raw_body_id(self) -> int: ...
 
     @property
+    def server_body_id(self) -> int: ...
+
+    @property
     def standalone_state(self) -> KeptOutside | None: ...
 
     @property

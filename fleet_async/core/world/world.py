@@ -371,11 +371,11 @@ class World(Carrying[_B], PendingBodiesApi):
             return
         if new is CollisionMode.DISABLED:
             p.setCollisionFilterGroupMask(
-                obj.body_id, -1, 0, 0, physicsClientId=self._backend.client
+                obj.server_body_id, -1, 0, 0, physicsClientId=self._backend.client
             )
         elif old is CollisionMode.DISABLED:
             p.setCollisionFilterGroupMask(
-                obj.body_id, -1, 1, -1, physicsClientId=self._backend.client
+                obj.server_body_id, -1, 1, -1, physicsClientId=self._backend.client
             )
 
     def on_object_callbacks_changed(self, obj: _B) -> None:
@@ -448,7 +448,7 @@ class World(Carrying[_B], PendingBodiesApi):
         """World (position, orientation) of one link of ``obj``, from PyBullet's kinematics."""
         self.sync_object(obj)
         state = p.getLinkState(
-            obj.body_id,
+            obj.server_body_id,
             link_index,
             computeForwardKinematics=1,
             physicsClientId=self._backend.client,
