@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 from fleet_async.core.actions.action_queue import ActionQueue
 from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin
 from fleet_async.core.agents.batteries import BatteryBank
+from fleet_async.core.agents.controller_schedule import ControllerSchedule
 from fleet_async.core.motion.kinematics import KinematicEngine
 from fleet_async.core.motion.segments import MotionLimits
 
@@ -42,7 +43,7 @@ class FleetMotion:
         self.engine = KinematicEngine(sim.state, self._on_motion_end)
         self.actions = ActionQueue(sim)
         self._slot_agent: dict[int, Agent] = {}
-        self._controlled: dict[int, Agent] = {}
+        self._controlled = ControllerSchedule()
         self._plugged: dict[int, list[AgentPlugin]] = {}
         self._limits: dict[tuple[Any, ...], MotionLimits] = {}
         self._dt = sim.params.timestep
@@ -60,8 +61,9 @@ class FleetMotion:
 
     @reference_path.setter
     def reference_path(self, value: bool) -> None:
-        self._reference = bool(value)
-        for agent in {id(a): a for a in self._agents_with_batteries()}.values():
+        self._reference = self._controlled.reference = bool(value)
+        agents = [*self._agents_with_batteries(), *self._controlled.agents()]
+        for agent in {id(a): a for a in agents}.values():
             self.track(agent)
 
     def _agents_with_batteries(self) -> list[Agent]:
@@ -113,10 +115,7 @@ class FleetMotion:
     def track(self, agent: Agent) -> None:
         """Re-read whether ``agent`` needs per-agent controller or plugin calls each step."""
         key = agent.object_id
-        if agent.has_stepped_controllers():
-            self._controlled[key] = agent
-        elif key in self._controlled:
-            del self._controlled[key]
+        self._controlled.track(agent, agent.has_stepped_controllers())
         self._track_batteries(agent)
         stepped = [pl for pl in agent.plugins if self._needs_step(pl)]
         if stepped:
@@ -152,7 +151,7 @@ class FleetMotion:
     def forget(self, agent: Agent) -> None:
         """Drop everything held for ``agent`` (it left the simulation)."""
         self.actions.forget(agent)
-        self._controlled.pop(agent.object_id, None)
+        self._controlled.forget(agent)
         self._plugged.pop(agent.object_id, None)
         for battery in self._battery_of.pop(agent.object_id, ()):
             battery.leave_bank()
@@ -173,13 +172,13 @@ class FleetMotion:
         """The agents' share of one step's motion phase."""
         self._dt = dt
         self.actions.tick(self._sim.sim_time, dt)
-        for agent in tuple(self._controlled.values()):
-            agent.step_controllers(dt)
+        if self._controlled:
+            self._controlled.run(self.engine, self._sim.step_count, self._sim.sim_time, dt)
         if not self.engine.is_idle():  # an idle fleet's step costs no array work
             self.engine.advance(dt)
         step = self._sim.step_count
         self._driven_step = step  # from here on, batteries are read at the step's end
-        if not (self._still and self.engine.is_idle() and not self._controlled):
+        if not (self._still and self.engine.is_idle() and not self._controlled.polls_every_step):
             # Velocities change only through the engine, a stepped controller or physics; a
             # fleet that was found still and has none of them running is still.
             self._still = not self.batteries.drive(step) and not self._sim.params.physics
@@ -192,13 +191,15 @@ class FleetMotion:
     def idle_steps(self, step: int, limit: int) -> int:
         """How many steps from ``step`` on (at most ``limit``) change no agent: nothing moves,
         no per-agent controller or plugin runs, and no action is due (see ActionQueue)."""
-        if self._controlled or self._plugged or not self.engine.is_idle():
+        if self._plugged or self._controlled.polls_every_step or not self.engine.is_idle():
             return 0
-        return self.actions.idle_steps(step, self._sim.params.timestep, limit)
+        dt = self._sim.params.timestep
+        return self._controlled.idle_steps(step, dt, self.actions.idle_steps(step, dt, limit))
 
     def skip(self, last_step: int) -> None:
         """Steps up to ``last_step`` were skipped as empty."""
         self.actions.skip(last_step * self._sim.params.timestep)
+        self._controlled.skipped(last_step + 1)
 
     def motion_ended(self, agent: Agent, reached: bool) -> None:
         """Record that ``agent`` stopped and wake an action waiting for it.
