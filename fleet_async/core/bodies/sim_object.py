@@ -125,6 +125,10 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
             world.sync_body_list()
         return self._body_id
 
+    @body_id.setter
+    def body_id(self, value: int) -> None:
+        self._body_id = int(value)
+
     @property
     def server_body_id(self) -> int:
         """The body id for calls PyBullet's server answers (poses, masses, dynamics, contact
@@ -134,10 +138,6 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         if self._body_id == PENDING_BODY and self.sim_core is not None:
             self.sim_core.world.create_pending_bodies()
         return self._body_id
-
-    @body_id.setter
-    def body_id(self, value: int) -> None:
-        self._body_id = int(value)
 
     @property
     def raw_body_id(self) -> int:

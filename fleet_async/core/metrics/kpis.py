@@ -393,7 +393,7 @@ class KpiCollector:
             self._relink()
             self._linked = True
         if self._live_count and bool(self._motion()[1].any()):
-            for _ in range(count):  # a still velocity left over: step the pass itself
+            for _i in range(count):  # a still velocity left over: step the pass itself
                 self._on_step()
         else:
             self._steps += count

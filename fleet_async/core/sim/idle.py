@@ -99,11 +99,8 @@ class IdleSteps:
             if not free:
                 return 0
             free = schedule.steps_until_due(step, dt, free)
-        if world.has_object_callbacks():
-            for obj in world.objects_with_callbacks():
-                if not free:
-                    return 0
-                free = obj.callback_steps_until_due(step, dt, free)
+        if free and world.has_object_callbacks():
+            free = world.object_callback_steps(step, dt, free)
         return free
 
     def skip(self, step: int, n: int) -> None:

@@ -368,8 +368,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
             callback(self, elapsed)
         for on_step, elapsed in self._plugin_schedule.due(now, dt):
             on_step(elapsed)
-        for obj in self._world.objects_with_callbacks():
-            obj.execute_callbacks(now)
+        self._world.run_object_callbacks(self._step_count, now, dt)
 
     def _phase_motion(self) -> None:
         dt = self._params.timestep
