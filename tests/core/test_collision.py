@@ -564,6 +564,7 @@ def test_few_movers_find_what_the_hash_finds(monkeypatch):
                 sim.close()
         return out
 
+    monkeypatch.setattr("fleet_async.core.collision.broadphase._FEW_MIN_ROWS", 0)
     few = logs()
     monkeypatch.setattr("fleet_async.core.collision.broadphase._FEW_MOVERS", 0)  # always hash
     assert few == logs()

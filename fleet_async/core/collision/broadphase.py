@@ -35,6 +35,7 @@ _CORNER_MAX = 400
 # than hashing all objects' cells: about 5 ns per object per mover against about 100 ns per
 # object for the hash.
 _FEW_MOVERS = 8
+_FEW_MIN_ROWS = 512  # below, the hash's fixed cost is small and it was measured faster
 _SLACK = 1e-6  # m: AABBs this close still pair (rounding must never lose a touching pair)
 
 
@@ -90,7 +91,7 @@ def candidate_pairs(
     if n < 2 or not np.count_nonzero(moved):
         return _EMPTY
     movers = moved.nonzero()[0]
-    if len(movers) <= _FEW_MOVERS and bounds is not None:
+    if len(movers) <= _FEW_MOVERS and n >= _FEW_MIN_ROWS and bounds is not None:
         return _few_movers_pairs(aabb_min, aabb_max, flat, movers, n)
     inv = 1.0 / cell_size
     if bounds is not None:
