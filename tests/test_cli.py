@@ -717,15 +717,32 @@ def test_run_trace_writes_a_trace_the_viewer_reads(script, scenario, tmp_path):
     assert sorted(b["name"] for b in reader.bodies.values()) == ["box", "r0", "r1"]
 
 
-def test_view_rejects_a_cut_trace_naming_file_problem_and_version(script, scenario, tmp_path):
+def test_view_shows_a_cut_trace_with_a_warning_and_rejects_a_bad_one(script, scenario, tmp_path):
     out = tmp_path / "t.fatrace"
     assert cli(script, "run", scenario, "--duration", "1", "--trace", out).returncode == 0
     cut = tmp_path / "cut.fatrace"
     cut.write_bytes(out.read_bytes()[:-20])
+    viewer = subprocess.Popen(
+        [script, "view", str(cut), "--no-browser", "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        warning = viewer.stderr.readline()  # type: ignore[union-attr]
+        assert warning.startswith(f"fleet-async: warning: {cut}: truncated: record")
+        assert "the viewer shows the readable prefix" in warning
+        assert "fleet_async viewer:" in viewer.stdout.readline()  # type: ignore[union-attr]
+    finally:
+        viewer.send_signal(signal.SIGINT)
+        viewer.wait(timeout=30)
+    bad = bytearray(out.read_bytes())
+    bad[24:28] = b"\xff\xff\xff\xff"  # the META record's payload is no longer JSON
+    cut.write_bytes(bytes(bad))
     result = cli(script, "view", cut, "--no-browser")
     assert result.returncode == 2
     line = error_line(result.stderr)
-    assert str(cut) in line and "truncated" in line and "versions 1 and 2" in line
+    assert str(cut) in line and "record 0 (META) at byte 16" in line and "versions 1 and 2" in line
     result = cli(script, "view", tmp_path / "missing.fatrace", "--no-browser")
     assert result.returncode == 2 and "no such trace file" in error_line(result.stderr)
 

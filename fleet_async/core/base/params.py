@@ -94,6 +94,10 @@ class SimulationParams:
             positions at the two checks; its orientation is the one at the check). Catches a
             fast robot passing through another within one step; off by default (it costs a
             swept broad phase; see docs/performance.md).
+        memory_share: The share of this machine's physical memory a spawn may plan to use
+            (> 0; default 0.5). A grid or a scenario whose bodies would need more is refused
+            before anything is built, saying how much it needs (at least 16 KiB a body; a
+            mobile robot from a URDF takes about 100 KiB). Raise it (e.g. 0.9) to allow more.
     """
 
     target_rtf: float = 1.0
@@ -133,6 +137,7 @@ class SimulationParams:
     seed: int = 0
     sync_pybullet_every_step: bool = False
     collision_sweep: bool = False
+    memory_share: float = 0.5
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(
@@ -184,6 +189,12 @@ class SimulationParams:
             "duration",
             self.duration,
             "a finite number >= 0 (0: run until interrupted)",
+        )
+        _require(
+            num(self.memory_share) and self.memory_share > 0,
+            "memory_share",
+            self.memory_share,
+            "a number > 0 (the share of physical memory a spawn may plan to use)",
         )
         freq = self.collision_check_frequency
         _require(

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.base.config_utils import load_yaml_config, register_class, resolve_class
 from fleet_async.core.base.params import SimulationParams
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.devices import WorkcellPlugin
 from fleet_async.core.managers.agent_manager import AgentManager
@@ -354,7 +355,9 @@ def _plugin_spec(
     expect_type(entry, dict, "a mapping", where, label)
     reject_unknown_keys(list(entry), PLUGIN_KEYS, where, label)
     if ("type" in entry) == ("class" in entry):
-        raise ValueError(f"{where}{label}: give exactly one of 'type' or 'class', got {entry!r}")
+        raise ValueError(
+            f"{where}{label}: give exactly one of 'type' or 'class', got {short_repr(entry)}"
+        )
     if "type" in entry:
         name = entry["type"]
         if name not in SIM_PLUGIN_REGISTRY:
