@@ -194,6 +194,30 @@ class BatteryPlugin(AgentPlugin):
         bank.reanchor(slot, bank.now())
         bank.values[name][slot] = float(value)
 
+    def charging_steps_to(self, level: float, dt: float, limit: int) -> int | None:
+        """The fewest whole steps of ``dt`` seconds of charging, standing still from now,
+        after which the state of charge is at least ``level``, by the same formula the
+        bank evaluates (0 if it is there already; None if it never gets there within
+        ``limit`` steps)."""
+        soc = self.soc
+        if soc >= level:
+            return 0
+        gain, drain = self.charge_rate, self.drain_per_second  # charging: no idle_rate
+        if not gain - drain > 0:
+            return None
+
+        def after(k: int) -> float:
+            return min(1.0, max(0.0, soc + (gain - drain) * (k * dt)))
+
+        k = max(1, math.ceil((level - soc) / ((gain - drain) * dt)) - 2)
+        while k > 1 and after(k - 1) >= level:
+            k -= 1
+        while after(k) < level:
+            k += 1
+            if k > limit:
+                return None
+        return k
+
     # ----- stepping and checkpoints --------------------------------------------------------------
 
     def on_step(self, dt: float) -> None:
