@@ -228,12 +228,14 @@ class BatteryPlugin(AgentPlugin):
         bank.drive_one(self._slot, bank.now() - 1)
 
     def get_state(self) -> dict[str, Any]:
-        """The battery's anchor, rates and charging flag (``sim.save_state``)."""
+        """The battery's state (``sim.save_state``): ``soc``, ``used``, ``distance`` and
+        ``charging`` as they are now, and the anchor the bank evaluates from, which is what
+        :meth:`set_state` takes back (so a restored run continues to the bit)."""
         bank, slot = self._bank, self._slot
         state = {k: v for k, v in vars(self).items() if k not in ("_bank", "_slot")}
+        state.update(soc=self.soc, used=self.used, distance=self.distance, charging=self.charging)
         state["battery"] = bank.snapshot(slot)
         state["battery_step0"] = int(bank.step0[slot])
-        state["battery_charging"] = bool(bank.charging[slot])
         return state
 
     def set_state(self, state: dict[str, Any]) -> None:
@@ -241,13 +243,15 @@ class BatteryPlugin(AgentPlugin):
         state = dict(state)
         values = state.pop("battery")
         step0 = state.pop("battery_step0")
-        charging = state.pop("battery_charging")
+        charging = state.pop("charging")
+        for derived in ("soc", "used", "distance"):
+            state.pop(derived, None)
         vars(self).update(state)
         bank, slot = self._bank, self._slot
         for name, value in values.items():
             bank.values[name][slot] = value
         bank.step0[slot] = step0
-        bank.charging[slot] = charging
+        bank.charging[slot] = bool(charging)
 
 
 def _never() -> int:
