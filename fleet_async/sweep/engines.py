@@ -130,10 +130,17 @@ class PoolEngine(Engine):
                     queue.clear()
                     for future in [f for f in pending if f.cancel()]:
                         del pending[future]
+                    # At most `workers` runs are running; the pool hands one more to a
+                    # worker early, and that one cannot be cancelled any more.
+                    running = min(len(pending), workers)
                     logger.warning(
-                        "interrupted: finishing the %d runs already started (Ctrl+C again to "
-                        "stop at once)",
-                        len(pending),
+                        "interrupted: finishing the %d runs already started on %d workers%s "
+                        "(Ctrl+C again to stop at once)",
+                        running,
+                        workers,
+                        f" and {len(pending) - running} queued in the pool"
+                        if len(pending) > running
+                        else "",
                     )
                     continue
                 for future in sorted(done, key=lambda f: pending[f].index):

@@ -1,7 +1,8 @@
 """A small local HTTP server for the viewer page and one trace (standard library only).
 
-Routes: ``/`` the page, ``/trace.js`` ``/render.js`` ``/viewer.js`` ``/viewer.css`` its assets
-(package data in ``static/``), ``/trace`` the trace file, streamed in chunks. With
+Routes: ``/`` the page, its scripts (``/trace.js`` ``/palette.js`` ``/timeline.js``
+``/panel.js`` ``/vehicle.js`` ``/render.js`` ``/viewer.js``) and ``/viewer.css`` (package data
+in ``static/``), ``/trace`` the trace file, streamed in chunks. With
 ``follow=True`` (a run in progress, ``fleet-async run --view``) ``/trace`` keeps streaming what
 the writer appends until the trace's end record has been sent, so the page shows a live run;
 when the file stops growing for ``stale_after`` seconds without its end record, the server says
@@ -38,6 +39,10 @@ logger = logging.getLogger(__name__)
 
 _ASSETS = {
     "/trace.js": "text/javascript",
+    "/palette.js": "text/javascript",
+    "/timeline.js": "text/javascript",
+    "/panel.js": "text/javascript",
+    "/vehicle.js": "text/javascript",
     "/render.js": "text/javascript",
     "/viewer.js": "text/javascript",
     "/viewer.css": "text/css",

@@ -102,9 +102,15 @@ def test_click_on_a_robot_selects_it_and_lists_its_actions(browser_page, serve, 
     page.wait_for_function(f"document.getElementById('app').dataset.selected === '{target}'")
     name = reader.bodies[target]["name"]
     assert name in page.inner_text("#sel-name")
+    # The timeline: each action a span naming its object and goal (completed ones say no
+    # status; the pick and the drop here completed).
     events = page.inner_text("#sel-events")
-    assert "PickAction started" in events and "PickAction completed" in events
-    assert "DropAction completed" in events
+    box = next(
+        b["name"] for b in reader.bodies.values() if b.get("pickable") and b["name"] in events
+    )
+    assert f"PickAction {box} at (" in events and f"DropAction {box} at (" in events
+    assert "failed" not in events and "cancelled" not in events
+    assert f"carrying {box}" in events
     # Clicking an event seeks the clock to it.
     page.click("#sel-events li >> nth=0")
     page.wait_for_function("Number(document.getElementById('app').dataset.simTime) < 0.5")

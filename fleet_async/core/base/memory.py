@@ -27,19 +27,19 @@ def physical_memory() -> int | None:
         return None
 
 
-def check_spawn_fits(count: int, share: float, what: str) -> None:
+def check_spawn_fits(count: int, share: float | None, what: str) -> None:
     """Refuse a spawn of ``count`` bodies that would need more than ``share`` of memory.
 
     Args:
         count: Bodies the spawn would create.
-        share: ``SimulationParams.memory_share``.
+        share: ``SimulationParams.memory_share`` (None: no simulation to ask, no check).
         what: Where the count comes from, for the message (``file: entities[0].grid``).
 
     Raises:
         ValueError: naming ``what``, the count, the memory it needs and the machine's.
     """
     total = physical_memory()
-    if total is None or count * BODY_BYTES <= share * total:
+    if share is None or total is None or count * BODY_BYTES <= share * total:
         return
     gib = 1024**3
     raise ValueError(

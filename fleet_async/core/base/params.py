@@ -70,7 +70,10 @@ class SimulationParams:
             and go) or "constant" (``spatial_hash_cell_size``).
         spatial_hash_cell_size: Cell size in metres for the "constant" mode.
         collision_detection_method: Narrow phase: "closest_points", "contact_points" or
-            "hybrid"; None picks by physics (contacts with physics on, distances without).
+            "hybrid"; None picks by ``physics`` when the params are made (contacts with physics
+            on, distances without) and the field then holds the method picked, as
+            pybullet_fleet's does. ``dataclasses.replace(params, physics=...)`` keeps that
+            method: pass ``collision_detection_method=None`` with it to pick again.
         collision_margin: Metres: closer than this counts as touching (closest-points method).
         multi_cell_threshold: Objects larger than this many cells are hashed into every cell
             they cover instead of one.
@@ -153,6 +156,7 @@ class SimulationParams:
             )
         self._validate_numbers()
         self._validate_flags()
+        self.collision_detection_method = self.resolved_collision_detection_method
         level = self.log_level.lower() if isinstance(self.log_level, str) else self.log_level
         _require(level in LOG_LEVELS, "log_level", self.log_level, f"one of {LOG_LEVELS}")
         self.log_level = level
@@ -257,7 +261,8 @@ class SimulationParams:
 
     @property
     def resolved_collision_detection_method(self) -> CollisionDetectionMethod:
-        """The narrow-phase method in force: the explicit one, else by ``physics``."""
+        """The narrow-phase method in force: ``collision_detection_method``, else (if it was
+        set to None after the params were made) the one ``physics`` picks."""
         if self.collision_detection_method is not None:
             return self.collision_detection_method
         if self.physics:

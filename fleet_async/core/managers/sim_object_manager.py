@@ -403,8 +403,7 @@ class SimObjectManager(Generic[T]):
         what: str,
         name_prefix: str | None = None,
     ) -> list[T]:
-        """Spawn ``params[kinds[k]]`` at cell ``cells[k]``, keeping each type's orientation
-        (named ``<name_prefix>_<k>`` when a prefix is given)."""
+        """Spawn ``params[kinds[k]]`` at ``cells[k]`` in its orientation (``<name_prefix>_<k>``)."""
         if self.sim_core is not None:
             check_spawn_fits(len(cells), self.sim_core.params.memory_share, what)
         positions = grid.cell_positions(cells)
