@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
             return bench.run_from_args(args)
         except ValueError as exc:
             parser.error(str(exc))
-    sizes = [*args.n, *([bench.LARGE_SIZE] if args.large else [])]
+    sizes = [*(args.n or bench.DEFAULT_SIZES), *([bench.LARGE_SIZE] if args.large else [])]
     for n in sizes:
         ours: list[dict[str, Any]] = []
         theirs: list[float] = []

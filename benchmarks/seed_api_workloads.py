@@ -14,11 +14,24 @@ Workloads:
   checks every step (CLOSEST_POINTS, margin 0.02 m); 10 warm-up steps, then 100 timed
   ``step_once()`` calls. The same workload as ``fleet_async.bench``.
 - ``spawn N``: a plain loop of ``Agent.from_mesh`` (the benchmark's cube) or ``Agent.from_urdf``
-  (a shared model) with ``sim_core=sim``, as users write it, timed up to the end of the first
+  (a shared model) with ``sim_core=sim``, as users write it (``--kind loaded``: each robot
+  ``Agent.from_params`` with an omni + patrol controller and a battery, then a tote of the same
+  box shape ``SimObject.from_mesh`` and ``robot.attach_object(tote)``: the loop that went
+  quadratic), timed up to the end of the first
   ``step_once()`` so that work an implementation defers to the step is counted (``spawn_s``);
   then ``sim.client`` is read, as raw PyBullet calls do, and its time reported apart
   (``bodies_s``): fleet_async creates the PyBullet bodies a kinematic fleet never needed
   then, pybullet-fleet has nothing left to do.
+
+- ``realistic N``: the realistic fleet in seed-API terms (what both packages have of
+  ``fleet-async bench --realistic``): N robots (box, omni, 1.5 m/s) on a grid 4 m apart, each
+  with a battery; a third patrol a 1.5 m square (``patrol``, 1 s wait), a third wander
+  (``random_walk``, radius 1.5 m, waits 0.5-3 s), a third run an action queue of 20 rounds
+  (move 1.5 m, charge 2-10 s, move home, wait 1-5 s: the missions as actions); every other
+  robot carries a tote (attached), one in ten has a 1 Hz per-object callback; collision
+  checks every step. Spawned one call at a time, timed to the end of the first step
+  (``spawn_s``); then 50 warm-up steps and 200 timed ``step_once()`` calls (``step_ms``;
+  ``*_cpu_*``: the process's CPU time, steadier than wall time on a shared machine).
 
 Run:  python benchmarks/seed_api_workloads.py --package fleet_async fleet 1000
       /tmp/pbf/bin/python benchmarks/seed_api_workloads.py --package pybullet_fleet spawn 10000
@@ -118,7 +131,34 @@ def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
     controller = {"type": "omni", "max_linear_vel": 2.0, "max_angular_vel": 3.0}
     gc.collect()
     t0 = time.perf_counter()
-    if kind == "mesh":
+    if kind == "loaded":  # issue 28's loop: controllers, a battery, a tote attached
+        body = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.3, 0.2, 0.1])
+        tote = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.3, 0.2, 0.1])
+        for i in range(n):
+            x, y = 2.0 * (i % side), 2.0 * (i // side)
+            robot = m["agent"].Agent.from_params(
+                m["agent"].AgentSpawnParams(
+                    visual_shape=body,
+                    collision_shape=body,
+                    initial_pose=pose_cls.from_xyz(x, y, 0.1),
+                    mass=0.0,
+                    controller=[
+                        controller,
+                        {"type": "patrol", "waypoints": [[x, y, 0.1], [x + 1.0, y, 0.1]]},
+                    ],
+                    plugins=[{"type": "battery"}],
+                ),
+                sim_core=sim,
+            )
+            box = m["sim_object"].SimObject.from_mesh(
+                visual_shape=tote,
+                collision_shape=tote,
+                pose=pose_cls.from_xyz(x, y, 0.3),
+                mass=0.0,
+                sim_core=sim,
+            )
+            robot.attach_object(box, relative_pose=pose_cls.from_xyz(0.0, 0.0, 0.2))
+    elif kind == "mesh":
         for i in range(n):
             agent_cls.from_mesh(
                 visual_shape=cube,
@@ -155,6 +195,91 @@ def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
     }
 
 
+def _realistic_robot(m: dict[str, Any], sim: Any, i: int, side: int, rng: Any) -> None:
+    """One robot of the realistic workload (see the module docstring)."""
+    pose_cls, shape = m["geometry"].Pose, m["sim_object"].ShapeParams
+    body = shape(shape_type="box", half_extents=[0.3, 0.2, 0.1])
+    tote = shape(shape_type="box", half_extents=[0.15, 0.15, 0.1])
+    x, y = 4.0 * (i % side), 4.0 * (i // side)
+    controller: list[dict[str, Any]] = [
+        {"type": "omni", "max_linear_vel": 1.5, "max_angular_vel": 2.0}
+    ]
+    role = i % 3
+    if role == 0:
+        square = [[x + 1.5, y, 0.1], [x + 1.5, y + 1.5, 0.1], [x, y + 1.5, 0.1], [x, y, 0.1]]
+        controller.append({"type": "patrol", "waypoints": square, "wait_time": 1.0})
+    elif role == 1:
+        controller.append({"type": "random_walk", "radius": 1.5, "wait_range": [0.5, 3.0]})
+    battery = {"initial_soc": 0.5 + 0.5 * rng.random(), "charge_rate": 0.01}
+    robot = m["agent"].Agent.from_params(
+        m["agent"].AgentSpawnParams(
+            visual_shape=body,
+            collision_shape=body,
+            initial_pose=pose_cls.from_xyz(x, y, 0.1),
+            mass=0.0,
+            controller=controller,
+            plugins=[{"type": "battery", "config": battery}],
+        ),
+        sim_core=sim,
+    )
+    if i % 2 == 0:
+        box = m["sim_object"].SimObject.from_mesh(
+            visual_shape=tote,
+            collision_shape=tote,
+            pose=pose_cls.from_xyz(x, y, 0.3),
+            mass=0.0,
+            sim_core=sim,
+        )
+        robot.attach_object(box, relative_pose=pose_cls.from_xyz(0.0, 0.0, 0.2))
+    if i % 10 == 0:
+        robot.register_callback(lambda *_: None, 1.0)  # 1 Hz here, a 1 s period there
+    if role == 2:
+        action, path = m["action"], m["geometry"].Path
+        here, there = pose_cls.from_xyz(x, y, 0.1), pose_cls.from_xyz(x + 1.5, y, 0.1)
+        queue = []
+        for _ in range(20):
+            queue += [
+                action.MoveAction(path=path([there])),
+                action.WaitAction(duration=float(rng.uniform(2.0, 10.0)), action_type="charge"),
+                action.MoveAction(path=path([here])),
+                action.WaitAction(duration=float(rng.uniform(1.0, 5.0))),
+            ]
+        robot.add_action_sequence(queue)
+
+
+def realistic(m: dict[str, Any], n: int, steps: int = 200) -> dict[str, Any]:
+    """Spawn and step time of the realistic workload (see the module docstring)."""
+    import numpy as np
+
+    m["action"] = importlib.import_module(f"{m['agent'].__name__.rsplit('.', 1)[0]}.action")
+    sim = _sim(m)
+    side = math.ceil(math.sqrt(n))
+    rng = np.random.default_rng(SEED)
+    gc.collect()
+    t0, c0 = time.perf_counter(), time.process_time()
+    for i in range(n):
+        _realistic_robot(m, sim, i, side, rng)
+    sim.step_once()
+    spawn_s, spawn_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+    gc.collect()
+    for _ in range(50):
+        sim.step_once()
+    t0, c0 = time.perf_counter(), time.process_time()
+    for _ in range(steps):
+        sim.step_once()
+    step_ms = (time.perf_counter() - t0) * 1000.0 / steps
+    step_cpu_ms = (time.process_time() - c0) * 1000.0 / steps
+    _close(sim)
+    return {
+        "workload": "realistic",
+        "n": n,
+        "step_ms": step_ms,
+        "step_cpu_ms": step_cpu_ms,
+        "spawn_s": spawn_s,
+        "spawn_cpu_s": spawn_cpu_s,
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry: run one workload and print its JSON result."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
@@ -164,12 +289,17 @@ def main(argv: list[str] | None = None) -> int:
     fleet_p.add_argument("n", type=int)
     spawn_p = sub.add_parser("spawn", help="per-agent spawning loop + first step")
     spawn_p.add_argument("n", type=int)
-    spawn_p.add_argument("--kind", choices=("mesh", "urdf"), default="mesh")
+    spawn_p.add_argument("--kind", choices=("mesh", "urdf", "loaded"), default="mesh")
     spawn_p.add_argument("--model", default="mobile_robot", help="URDF model for --kind urdf")
+    real_p = sub.add_parser("realistic", help="the realistic fleet in seed-API terms")
+    real_p.add_argument("n", type=int)
+    real_p.add_argument("--steps", type=int, default=200, help="timed steps (default 200)")
     args = parser.parse_args(argv)
     m = _modules(args.package)
     if args.workload == "fleet":
         result = fleet(m, args.n)
+    elif args.workload == "realistic":
+        result = realistic(m, args.n, args.steps)
     else:
         result = spawn(m, args.n, args.kind, args.model)
     result["package"] = args.package

@@ -8,7 +8,7 @@ all in batches; ``+bodies`` is that creation, forced by reading ``sim.client`` a
 With ``--incumbent VENV`` the same script runs on pybullet-fleet in that venv, interleaved with
 fleet_async run by run, and the report shows both and the ratio.
 
-Run:  python benchmarks/spawn_bench.py [--n 1000 10000 100000] [--kind mesh|urdf]
+Run:  python benchmarks/spawn_bench.py [--n 1000 10000 100000] [--kind mesh|urdf|loaded]
           [--repeat 3] [--incumbent /tmp/pbf] [--json]
 """
 
@@ -42,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     """Command-line entry."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--n", type=int, nargs="+", default=[1000, 10000], metavar="N")
-    parser.add_argument("--kind", choices=("mesh", "urdf"), default="mesh")
+    parser.add_argument("--kind", choices=("mesh", "urdf", "loaded"), default="mesh")
     parser.add_argument(
         "--model",
         default=None,

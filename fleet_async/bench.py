@@ -12,8 +12,12 @@ margin 0.02 m; swept with ``--sweep``); 10 warm-up steps, then 100 timed step_on
 With ``--repeat R`` each size runs R times, each in a fresh simulation, and the median step
 time is reported beside every run's (memory is measured in the first).
 
+With ``--realistic`` it runs the realistic-fleet workload instead (batteries, patrols,
+random walks, missions, carried totes, per-object callbacks, KPIs; see
+``fleet_async/realistic_bench.py``), by default at 1,000 and 10,000 robots.
+
 Run:  fleet-async bench [--n 100 1000 10000] [--large] [--repeat R] [--sweep] [--json]
-          [--profile]
+          [--profile] [--realistic [--seconds S]]
  or:  python benchmarks/fleet_bench.py (the same flags, and --incumbent VENV)
 """
 
@@ -227,9 +231,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--n",
         type=int,
         nargs="+",
-        default=list(DEFAULT_SIZES),
+        default=None,
         metavar="N",
-        help="fleet sizes (agents) to run, in order (default: %(default)s)",
+        help=f"fleet sizes (agents) to run, in order (default: {list(DEFAULT_SIZES)}; "
+        "with --realistic [1000, 10000])",
     )
     parser.add_argument(
         "--large", action="store_true", help=f"also run {LARGE_SIZE:,} agents (after --n)"
@@ -254,12 +259,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sweep", action="store_true", help="run with collision_sweep=True (swept checks)"
     )
+    parser.add_argument(
+        "--realistic",
+        action="store_true",
+        help="the realistic-fleet workload (batteries, patrols, random walks, missions, "
+        "totes, callbacks, KPIs) instead of bare boxes",
+    )
+    parser.add_argument(
+        "--seconds",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="with --realistic: sim seconds to run, warm-up included (default 30)",
+    )
 
 
 def run_from_args(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Run every requested size and print its report; return the exit code (0)."""
     stream = out if out is not None else sys.stdout
-    sizes = [*args.n, *([LARGE_SIZE] if args.large else [])]
+    if getattr(args, "realistic", False):
+        from fleet_async import realistic_bench
+
+        if args.repeat < 1:
+            raise ValueError(f"--repeat: expected a number of runs >= 1, got {args.repeat}")
+        if not args.seconds > 5.0:
+            raise ValueError(f"--seconds: expected more than the 5 s warm-up, got {args.seconds}")
+        return realistic_bench.run_from_args(args, stream)
+    sizes = [*(args.n or DEFAULT_SIZES), *([LARGE_SIZE] if args.large else [])]
     for n in sizes:
         if n <= 0:
             raise ValueError(f"--n: fleet sizes must be > 0, got {n}")

@@ -654,6 +654,18 @@ def test_bench_json_matches_the_benchmark_script(script):
     )
 
 
+def test_bench_realistic_runs_the_realistic_fleet(capsys):
+    assert main(["bench", "--realistic", "--n", "30", "--seconds", "6", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert report["workload"] == "realistic" and report["n"] == 30
+    assert report["steps"] > 0 and report["step_ms"] > 0 and report["distance_total_m"] > 0
+
+
+def test_bench_realistic_needs_more_than_the_warm_up(capsys):
+    assert main(["bench", "--realistic", "--n", "30", "--seconds", "5"]) == 2
+    assert "--seconds: expected more than the 5 s warm-up, got 5.0" in capsys.readouterr().err
+
+
 def test_bench_rejects_a_non_positive_size(capsys):
     assert main(["bench", "--n", "0"]) == 2
     assert "fleet-async: error: --n: fleet sizes must be > 0, got 0" in capsys.readouterr().err

@@ -13,10 +13,12 @@ from fleet_async import (
     AgentPlugin,
     AgentSpawnParams,
     BatteryPlugin,
+    MultiRobotSimulationCore,
     Pose,
     ShapeParams,
     WaitAction,
 )
+from tests.conftest import headless_params
 
 DT = 0.1
 TOL = 1e-9
@@ -400,3 +402,91 @@ def test_rejected_plugin_entry_leaves_no_agent_behind(sim):
         spawn(sim, plugins=[{"type": "solar"}])
     assert sim.agents == []
     assert p.getNumBodies(physicsClientId=sim.client) == bodies
+
+
+# ----- the battery bank: one formula, one numpy pass --------------------------------------
+
+
+def _battery_fleet(sim, reference):
+    sim.fleet.reference_path = reference
+    agents = []
+    for i in range(6):
+        config = {
+            "initial_soc": 0.3 + 0.1 * i,
+            "drain_per_meter": 0.003,
+            "drain_per_second": 0.0007 * i,
+            "charge_rate": 0.02,
+            "discharge_rate": 0.001 * (i % 2),
+            "idle_rate": 0.0005 * (i % 3),
+        }
+        agent = with_battery(sim, "differential" if i % 2 else "omni", **config)
+        agent.set_pose(Pose.from_xyz(3.0 * i, 0.0, 0.1))
+        agents.append(agent)
+    return agents
+
+
+def _battery_run(sim, reference):
+    agents = _battery_fleet(sim, reference)
+    trace = []
+    for k in range(120):
+        if k % 40 == 0:
+            for i, agent in enumerate(agents):
+                agent.set_goal_pose(Pose.from_xyz(3.0 * i + (k % 80) / 20.0, 1.0 + i, 0.1))
+                agent.set_charging(bool((i + k // 40) % 2))
+        sim.step_once()
+        trace.append(
+            [(a.battery_soc, a.battery_plugin.used, a.battery_plugin.distance) for a in agents]
+        )
+    return trace
+
+
+@pytest.fixture
+def other_sim():
+    core = MultiRobotSimulationCore(headless_params())
+    yield core
+    core.close()
+
+
+def test_numpy_pass_and_per_robot_reference_give_the_same_bits(sim, other_sim):
+    vector = _battery_run(sim, reference=False)
+    reference = _battery_run(other_sim, reference=True)
+    assert vector == reference
+    assert vector[0] != vector[-1]
+
+
+def test_batteries_do_not_block_idle_skipping_and_a_skipped_span_equals_stepping(sim, other_sim):
+    def standing(s):
+        agents = _battery_fleet(s, reference=False)
+        agents[1].set_charging(True)
+        s.step_once()
+        return agents
+
+    stepped, skipped = standing(sim), standing(other_sim)
+    other = other_sim
+    assert other.idle_steps(500) == 500
+    other.skip_steps(500)
+    steps(sim, 500)
+    assert [(a.battery_soc, a.battery_plugin.used) for a in stepped] == [
+        (a.battery_soc, a.battery_plugin.used) for a in skipped
+    ]
+    assert stepped[2].battery_soc < 0.5 and stepped[1].battery_soc == 1.0
+
+
+def test_incumbent_keys_discharge_rate_while_moving_idle_rate_while_standing(sim):
+    agent = with_battery(
+        sim, drain_per_meter=0.0, drain_per_second=0.0, discharge_rate=0.01, idle_rate=0.002
+    )
+    steps(sim, 10)  # standing 1 s
+    assert agent.battery_soc == pytest.approx(1.0 - 0.002, abs=TOL)
+    agent.set_goal_pose(Pose.from_xyz(0.5, 0.0, 0.1))
+    moving = 0
+    while True:
+        sim.step_once()
+        moving += 1  # the step it arrives in is driven, too
+        if not agent.is_moving:
+            break
+    assert agent.battery_soc == pytest.approx(1.0 - 0.002 - 0.01 * DT * moving, abs=1e-6)
+    agent.set_charging(True)  # charging: neither rate applies
+    soc = agent.battery_soc
+    steps(sim, 5)
+    assert agent.battery_soc == pytest.approx(soc + 0.01 * 0.5, abs=TOL)

@@ -514,3 +514,58 @@ def test_reading_aabbs_between_a_removal_and_the_check_still_ends_its_contacts()
         sim.step_once()
         assert sim.get_active_collision_pairs() == [] and ended == [1]
         assert sim.idle_steps(5) == 5
+
+
+def _few_movers_log(sim, n_movers):
+    """Collision events of a dense grid where a few robots drive through the others."""
+    from fleet_async import Agent as _Agent
+    from fleet_async import SimEvents as _Events
+
+    log = []
+    sim.events.on(
+        _Events.COLLISION_STARTED,
+        lambda obj_a, obj_b, **_: log.append(
+            ("+", sim.step_count, obj_a.object_id, obj_b.object_id)
+        ),
+    )
+    sim.events.on(
+        _Events.COLLISION_ENDED,
+        lambda obj_a, obj_b, **_: log.append(
+            ("-", sim.step_count, obj_a.object_id, obj_b.object_id)
+        ),
+    )
+    cube = ShapeParams("box", half_extents=[0.2, 0.2, 0.2])
+    agents = [
+        _Agent.from_mesh(
+            cube,
+            cube,
+            Pose.from_xyz(0.5 * (i % 12), 0.5 * (i // 12), 0.2),
+            sim_core=sim,
+            controller="omni",
+            collision_mode="normal_2d" if i % 5 == 0 else "normal_3d",
+        )
+        for i in range(144)
+    ]
+    for k in range(n_movers):
+        agents[13 * k + 3].set_goal_pose(Pose.from_xyz(6.5 - k, 0.3 * k, 0.2))
+    for _ in range(60):
+        sim.step_once()
+    return log
+
+
+def test_few_movers_find_what_the_hash_finds(monkeypatch):
+    def logs():
+        out = []
+        for movers in (1, 3):
+            sim = MultiRobotSimulationCore(headless_params())
+            try:
+                out.append(_few_movers_log(sim, movers))
+            finally:
+                sim.close()
+        return out
+
+    monkeypatch.setattr("fleet_async.core.collision.broadphase._FEW_MIN_ROWS", 0)
+    few = logs()
+    monkeypatch.setattr("fleet_async.core.collision.broadphase._FEW_MOVERS", 0)  # always hash
+    assert few == logs()
+    assert len(few[0]) > 4 and len(few[1]) > len(few[0])

@@ -767,3 +767,42 @@ def test_custom_high_level_compute_runs_once_per_step_with_dt(sim):
     assert recorder.calls == [(agent, n, DT) for n in range(7)]
     assert [n for _, n, _ in other.calls] == list(range(7))
     assert all(dt == 0.1 for _, _, dt in recorder.calls)
+
+
+# ----- woken, not polled ------------------------------------------------------------------
+
+
+def _walkers(sim):
+    robots = []
+    for i in range(6):
+        x = 5.0 * i
+        if i % 2:
+            chain = [
+                {"type": "omni"},
+                {"type": "patrol", "waypoints": [[x + 1.0, 0.0, 0.1], [x, 0.0, 0.1]], "wait": 7.0},
+            ]
+        else:
+            chain = [{"type": "omni"}, {"type": "random_walk", "radius": 2.0, "wait_range": [3, 9]}]
+        robots.append(spawn(sim, chain, xyz=(x, 0.0, 0.1)))
+    return robots
+
+
+def test_woken_controllers_match_polling_and_let_idle_steps_skip(sim):
+    other = MultiRobotSimulationCore(headless_params())
+    try:
+        other.fleet.reference_path = True  # every controller called every step
+        fast, slow = _walkers(sim), _walkers(other)
+        skipped = 0
+        while sim.step_count < 600:
+            n = sim.skip_idle_steps(600 - sim.step_count)
+            skipped += n
+            if sim.step_count < 600:
+                sim.step_once()
+        for _ in range(600):
+            other.step_once()
+        assert skipped > 100  # the pauses were jumped over
+        for a, b in zip(fast, slow, strict=True):
+            assert a.get_pose().position.tolist() == b.get_pose().position.tolist()
+            assert a.get_pose().orientation.tolist() == b.get_pose().orientation.tolist()
+    finally:
+        other.close()

@@ -347,3 +347,40 @@ def test_a_first_call_after_a_run_is_an_error_not_a_row_of_zeros(sim):
     kpis = sim.kpis(from_now=True)  # counting from here on is asked for
     steps(sim, 5)
     assert kpis.summary().steps == 5 and sim.kpis() is kpis
+
+
+@pytest.fixture
+def other_sim():
+    core = fa.MultiRobotSimulationCore(
+        fa.SimulationParams(gui=False, monitor=False, target_rtf=0.0, timestep=DT, seed=0)
+    )
+    yield core
+    core.close()
+
+
+def test_kpis_let_idle_steps_skip_and_a_skipped_span_counts_as_stepped(sim, other_sim):
+    def scene(s):
+        battery = [{"type": "battery", "config": {"drain_per_second": 0.001}}]
+        a = robot(s, 0.0, 0.0, "a", plugins=battery)
+        robot(s, 3.0, 0.0, "b", plugins=battery)
+        a.add_action(WaitAction(duration=20.0))
+        kpis = s.kpis()
+        kpis.stop_after_step(250)
+        a.set_goal_pose(Pose.from_xyz(1.0, 0.0, 0.1))
+        for _ in range(30):  # drive, stop, then only a wait timer is pending
+            s.step_once()
+        return kpis
+
+    stepped, skipped = scene(sim), scene(other_sim)
+    for _ in range(270):
+        sim.step_once()
+    ran = 0
+    while other_sim.step_count < 300:
+        if not other_sim.skip_idle_steps(300 - other_sim.step_count):
+            other_sim.step_once()
+            ran += 1
+    assert other_sim.step_count == 300 and ran < 10
+    assert stepped.stopped and skipped.stopped
+    assert stepped.summary() == skipped.summary()
+    assert stepped.per_robot() == skipped.per_robot()
+    assert stepped.summary().steps == 250

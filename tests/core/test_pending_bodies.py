@@ -8,6 +8,7 @@ import pytest
 
 from fleet_async import (
     Agent,
+    AgentSpawnParams,
     CollisionMode,
     MultiRobotSimulationCore,
     Pose,
@@ -108,3 +109,59 @@ def test_queries_that_need_bodies_create_them():
         a, b = spawn(sim, 0.0), spawn(sim, 0.19)
         sim.step_once()
         assert b.raw_body_id >= 0 and a.raw_body_id >= 0
+
+
+def _loaded_spawn_loop(sim, n):
+    """The issue-28 spawn loop: an agent with controllers and a battery, a tote of the same
+    shape (so both wait in one creation group), the tote attached; then the first step."""
+    for i in range(n):
+        x = 2.0 * i
+        params = AgentSpawnParams(
+            visual_shape=CUBE,
+            collision_shape=CUBE,
+            initial_pose=Pose.from_xyz(x, 0.0, 0.1),
+            controller=[
+                {"type": "omni", "max_linear_vel": 2.0},
+                {"type": "patrol", "waypoints": [[x, 0.0, 0.1], [x, 1.0, 0.1]]},
+            ],
+            plugins=[{"type": "battery"}],
+        )
+        robot = Agent.from_params(params, sim_core=sim)
+        tote = SimObject.from_mesh(CUBE, CUBE, Pose.from_xyz(x, 0.0, 0.4), sim_core=sim)
+        assert robot.attach_object(tote, relative_pose=Pose.from_xyz(0.0, 0.0, 0.3))
+    sim.step_once()
+
+
+def _count_syncs(monkeypatch, work):
+    calls = []
+    real = p.syncBodyInfo
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(p, "syncBodyInfo", counting)
+    work()
+    monkeypatch.setattr(p, "syncBodyInfo", real)
+    return len(calls)
+
+
+@pytest.mark.parametrize("read_body_ids", [False, True])
+def test_body_list_syncs_do_not_grow_with_the_fleet(monkeypatch, read_body_ids):
+    counts = []
+    for n in (10, 40):
+        sim = MultiRobotSimulationCore(headless_params())
+        try:
+
+            def work(sim=sim, n=n):
+                _loaded_spawn_loop(sim, n)
+                if read_body_ids:  # raw access, object by object, as user code does it
+                    for _ in range(n):
+                        robot = spawn(sim, -5.0)
+                        assert p.getBodyInfo(robot.body_id, physicsClientId=sim.client)
+
+            counts.append(_count_syncs(monkeypatch, work))
+            assert all(o.raw_body_id != PENDING_BODY for o in sim.sim_objects) or not read_body_ids
+        finally:
+            p.disconnect(sim.client)
+    assert counts[0] == counts[1] <= 1

@@ -6,10 +6,14 @@ One ``FleetMotion`` belongs to each simulation (``sim.fleet``) and runs as a mot
 2. per-agent controllers (patrol, random walk, user controllers) for agents that have them;
 3. the kinematic engine advances every agent on a built-in controller in one numpy pass, and
    wakes the actions of agents that stopped;
-4. per-agent plugins (battery) for agents that have them;
+4. every battery whose robot moved in the step, in one numpy pass (``agents/batteries.py``;
+   a standing robot's battery follows a formula and costs nothing per step), then per-agent
+   plugins that need a call every step (those that override ``on_step``);
 5. timed actions (waits) that end with this step complete, at the step's end time.
 
-Agents without high-level controllers or plugins cost nothing in steps 2 and 4.
+Agents without high-level controllers or stepped plugins cost nothing in steps 2 and 4.
+``reference_path = True`` steps every battery through its own ``on_step`` instead of the
+numpy pass: the per-robot reference the vectorized path is tested against (same bits).
 """
 
 from __future__ import annotations
@@ -18,6 +22,9 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.actions.action_queue import ActionQueue
+from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin
+from fleet_async.core.agents.batteries import BatteryBank
+from fleet_async.core.agents.controller_schedule import ControllerSchedule
 from fleet_async.core.motion.kinematics import KinematicEngine
 from fleet_async.core.motion.segments import MotionLimits
 
@@ -36,10 +43,36 @@ class FleetMotion:
         self.engine = KinematicEngine(sim.state, self._on_motion_end)
         self.actions = ActionQueue(sim)
         self._slot_agent: dict[int, Agent] = {}
-        self._controlled: dict[int, Agent] = {}
-        self._plugged: dict[int, Agent] = {}
+        self._controlled = ControllerSchedule()
+        self._plugged: dict[int, list[AgentPlugin]] = {}
         self._limits: dict[tuple[Any, ...], MotionLimits] = {}
         self._dt = sim.params.timestep
+        self.batteries = BatteryBank(self._battery_clock, self._dt, sim.state)
+        self._battery_of: dict[int, list[BatteryPlugin]] = {}
+        self._driven_step = -1
+        self._reference = False
+        self._still = False  # the last battery pass found no robot with a velocity
+
+    @property
+    def reference_path(self) -> bool:
+        """Whether batteries are stepped robot by robot (the reference the numpy pass is
+        tested against) instead of in one numpy pass. Both give the same bits."""
+        return self._reference
+
+    @reference_path.setter
+    def reference_path(self, value: bool) -> None:
+        self._reference = self._controlled.reference = bool(value)
+        agents = [*self._agents_with_batteries(), *self._controlled.agents()]
+        for agent in {id(a): a for a in agents}.values():
+            self.track(agent)
+
+    def _agents_with_batteries(self) -> list[Agent]:
+        return [pl.agent for plugins in self._battery_of.values() for pl in plugins[:1]]
+
+    def _battery_clock(self) -> int:
+        """Steps the batteries are current at: the step's end once this step drove them."""
+        step = self._sim.step_count
+        return step + 1 if self._driven_step == step and self._sim.in_step else step
 
     def add_slot(self, agent: Agent, kind: int) -> int:
         """Give ``agent`` an engine slot; return it."""
@@ -82,20 +115,46 @@ class FleetMotion:
     def track(self, agent: Agent) -> None:
         """Re-read whether ``agent`` needs per-agent controller or plugin calls each step."""
         key = agent.object_id
-        if agent.has_stepped_controllers():
-            self._controlled[key] = agent
-        elif key in self._controlled:
-            del self._controlled[key]
-        if agent.has_plugins():
-            self._plugged[key] = agent
+        self._controlled.track(agent, agent.has_stepped_controllers())
+        self._track_batteries(agent)
+        stepped = [pl for pl in agent.plugins if self._needs_step(pl)]
+        if stepped:
+            self._plugged[key] = stepped
         elif key in self._plugged:
             del self._plugged[key]
+
+    def _needs_step(self, plugin: AgentPlugin) -> bool:
+        if isinstance(plugin, BatteryPlugin):
+            return self._reference or plugin.steps_per_agent
+        return type(plugin).on_step is not AgentPlugin.on_step
+
+    def _track_batteries(self, agent: Agent) -> None:
+        """Move ``agent``'s batteries into the bank, and the ones it dropped out of it."""
+        key = agent.object_id
+        now = [pl for pl in agent.plugins if isinstance(pl, BatteryPlugin)]
+        for old in self._battery_of.get(key, ()):
+            if not any(old is pl for pl in now):
+                old.leave_bank()
+        bank = self.batteries
+        for pl in now:
+            vector = not self._needs_step(pl)
+            if pl.bank is not bank:
+                pl.move_to(bank, agent.state_row, vector)
+            else:
+                bank.set_vector(pl.bank_slot, vector)
+        self._still = False
+        if now:
+            self._battery_of[key] = now
+        else:
+            self._battery_of.pop(key, None)
 
     def forget(self, agent: Agent) -> None:
         """Drop everything held for ``agent`` (it left the simulation)."""
         self.actions.forget(agent)
-        self._controlled.pop(agent.object_id, None)
+        self._controlled.forget(agent)
         self._plugged.pop(agent.object_id, None)
+        for battery in self._battery_of.pop(agent.object_id, ()):
+            battery.leave_bank()
 
     def reset(self) -> None:
         """Forget every agent (simulation reset)."""
@@ -104,30 +163,43 @@ class FleetMotion:
         self._slot_agent.clear()
         self._controlled.clear()
         self._plugged.clear()
+        self.batteries = BatteryBank(self._battery_clock, self._dt, self._sim.state)
+        self._battery_of.clear()
+        self._driven_step = -1
+        self._still = False
 
     def advance(self, dt: float) -> None:
         """The agents' share of one step's motion phase."""
         self._dt = dt
         self.actions.tick(self._sim.sim_time, dt)
-        for agent in tuple(self._controlled.values()):
-            agent.step_controllers(dt)
+        if self._controlled:
+            self._controlled.run(self.engine, self._sim.step_count, self._sim.sim_time, dt)
         if not self.engine.is_idle():  # an idle fleet's step costs no array work
             self.engine.advance(dt)
-        for agent in tuple(self._plugged.values()):
-            agent.step_plugins(dt)
+        step = self._sim.step_count
+        self._driven_step = step  # from here on, batteries are read at the step's end
+        if not (self._still and self.engine.is_idle() and not self._controlled.polls_every_step):
+            # Velocities change only through the engine, a stepped controller or physics; a
+            # fleet that was found still and has none of them running is still.
+            self._still = not self.batteries.drive(step) and not self._sim.params.physics
+        for plugins in tuple(self._plugged.values()):
+            for plugin in plugins:
+                plugin.on_step(dt)
         # Last: a wait that ends with this step has covered all of it (a charge charged).
         self.actions.expire(self._sim.sim_time + dt, dt)
 
     def idle_steps(self, step: int, limit: int) -> int:
         """How many steps from ``step`` on (at most ``limit``) change no agent: nothing moves,
         no per-agent controller or plugin runs, and no action is due (see ActionQueue)."""
-        if self._controlled or self._plugged or not self.engine.is_idle():
+        if self._plugged or self._controlled.polls_every_step or not self.engine.is_idle():
             return 0
-        return self.actions.idle_steps(step, self._sim.params.timestep, limit)
+        dt = self._sim.params.timestep
+        return self._controlled.idle_steps(step, dt, self.actions.idle_steps(step, dt, limit))
 
     def skip(self, last_step: int) -> None:
         """Steps up to ``last_step`` were skipped as empty."""
         self.actions.skip(last_step * self._sim.params.timestep)
+        self._controlled.skipped(last_step + 1)
 
     def motion_ended(self, agent: Agent, reached: bool) -> None:
         """Record that ``agent`` stopped and wake an action waiting for it.

@@ -40,6 +40,9 @@ class FleetHost(QueueHost, Protocol):
     @property
     def in_step(self) -> bool: ...
 
+    @property
+    def step_count(self) -> int: ...
+
 
 class AgentHost(BodyHost, MotionHost, ActionHost, MissionHost, Protocol):
     """The simulation, as its agents see it."""

@@ -121,13 +121,23 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         if sim is not None:
             world = sim.world
             if self._body_id == PENDING_BODY:
-                world.create_pending_bodies()
+                world.create_pending_bodies(for_raw_access=True)
             world.sync_body_list()
         return self._body_id
 
     @body_id.setter
     def body_id(self, value: int) -> None:
         self._body_id = int(value)
+
+    @property
+    def server_body_id(self) -> int:
+        """The body id for calls PyBullet's server answers (poses, masses, dynamics, contact
+        filters, link states): a pending body is created first, but PyBullet's client-side
+        body list is not brought up to date (``getBodyInfo`` may not know the body yet).
+        What the simulation itself uses, so that its own reads never cost a body-list sync."""
+        if self._body_id == PENDING_BODY and self.sim_core is not None:
+            self.sim_core.world.create_pending_bodies()
+        return self._body_id
 
     @property
     def raw_body_id(self) -> int:

@@ -152,7 +152,7 @@ class KpiCollector:
         # event -> (handler, priority); every handler takes the payload keys it reads and
         # **_ for the rest (the bus passes a handler only the keys it names).
         self._handlers: dict[str, tuple[Callable[..., Any], int]] = {
-            SimEvents.POST_STEP: (self._on_step, OBSERVE_FIRST),
+            SimEvents.STEPS_SKIPPED: (self._on_skipped, OBSERVE_FIRST),
             SimEvents.AGENT_SPAWNED: (self._on_spawned, OBSERVE_FIRST),
             # OBJECT_REMOVED, not AGENT_REMOVED: sim.reset() emits only the former.
             SimEvents.OBJECT_REMOVED: (self._on_removed, OBSERVE_LAST),
@@ -168,6 +168,10 @@ class KpiCollector:
             self._on_spawned(cast("Agent", agent))
         for event, (handler, priority) in self._handlers.items():
             sim.events.on(event, handler, priority=priority)
+        # A step observer, not a POST_STEP handler: it sees the step before any handler (as
+        # OBSERVE_FIRST did) and does not stop idle steps from being skipped.
+        sim.add_step_observer(self._on_step, before_handlers=True)
+        self._stop_step: int | None = None
 
     # ----- reading --------------------------------------------------------------------------
 
@@ -183,6 +187,8 @@ class KpiCollector:
         self._stopped = True
         for event, (handler, _) in self._handlers.items():
             self._sim.events.off(event, handler)
+        self._sim.remove_step_observer(self._on_step)
+        self._sim.remove_step_observer(self._check_stop)
 
     def stop_after_step(self, step: int) -> None:
         """Stop counting once the simulation's step number ``step`` (``sim.step_count``) has
@@ -196,13 +202,13 @@ class KpiCollector:
         if sim.step_count >= step:
             self.stop()
             return
+        self._stop_step = step
+        # After every POST_STEP handler of the step (an observer, so idle steps still skip).
+        sim.add_step_observer(self._check_stop)
 
-        def after_step(**_: Any) -> None:
-            if sim.step_count >= step:
-                sim.events.off(SimEvents.POST_STEP, after_step)
-                self.stop()
-
-        sim.events.on(SimEvents.POST_STEP, after_step, priority=OBSERVE_LAST)
+    def _check_stop(self, step: int) -> None:
+        if self._stop_step is not None and step >= self._stop_step:
+            self.stop()
 
     def summary(self) -> FleetKpis:
         """The fleet's figures since the collector started (see :class:`FleetKpis`)."""
@@ -350,19 +356,15 @@ class KpiCollector:
 
     # ----- the per-step pass (hot path: numpy only) -------------------------------------------
 
-    def _on_step(self, **_: Any) -> None:
+    def _on_step(self, _step: int = 0) -> None:
         self._steps += 1
         if not self._linked:
             self._relink()
             self._linked = True
         if not self._live_count:
             return
-        store = self._sim.state
-        index, rows = self._live_index, self._live_rows
-        vel = store.velocity[rows]
-        spin = store.angular_velocity[rows]
-        speed2 = np.einsum("ij,ij->i", vel, vel)
-        moving = speed2 + np.einsum("ij,ij->i", spin, spin) > _STILL
+        speed2, moving = self._motion()
+        index = self._live_index
         busy = self._busy[index]
         if self._any_ended:
             busy = busy | self._ended[index]
@@ -371,6 +373,35 @@ class KpiCollector:
         self._speed_sum[index] += np.sqrt(speed2)  # times dt at read: the distance
         self._moving[index] += moving
         self._waiting[index] += busy > moving  # busy and not moving
+
+    def _motion(self) -> tuple[np.ndarray, np.ndarray]:
+        """Squared speed and whether each live robot moved, from the store."""
+        store = self._sim.state
+        rows = self._live_rows
+        vel = store.velocity[rows]
+        spin = store.angular_velocity[rows]
+        speed2 = np.einsum("ij,ij->i", vel, vel)
+        return speed2, speed2 + np.einsum("ij,ij->i", spin, spin) > _STILL
+
+    def _on_skipped(self, step: int, count: int, **_: Any) -> None:
+        """``count`` empty steps from ``step`` were skipped: count them as if they ran."""
+        if self._stop_step is not None:
+            count = min(count, self._stop_step - step)
+        if count <= 0:
+            return
+        if not self._linked:
+            self._relink()
+            self._linked = True
+        if self._live_count and bool(self._motion()[1].any()):
+            for _i in range(count):  # a still velocity left over: step the pass itself
+                self._on_step()
+        else:
+            self._steps += count
+            if self._live_count:
+                index = self._live_index
+                self._waiting[index] += self._busy[index] * count  # busy, and nothing moves
+        if self._stop_step is not None and step + count >= self._stop_step:
+            self.stop()
 
     # ----- rows -----------------------------------------------------------------------------
 

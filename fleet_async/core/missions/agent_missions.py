@@ -50,20 +50,15 @@ def _time_to_charge(battery: Any, to: float, agent: MissionAgent) -> float:
         raise ValueError(f"agent.charge: to must be a state of charge in [0, 1], got {to!r}")
     sim = agent.sim_core
     dt = sim.params.timestep if sim is not None else 0.0
-    soc = float(battery.soc)
-    # BatteryPlugin.on_step's change of a robot standing still, with the same arithmetic
-    gain = battery.charge_rate * dt - battery.drain_per_second * dt
-    if soc >= to:
-        return 0.0
-    if not gain > 0:
+    # The battery counts with its own formula (a charging robot standing still).
+    steps = battery.charging_steps_to(to, dt, _MAX_CHARGE_STEPS)
+    if steps is None:
         raise ValueError(
             f"agent.charge: {agent.name!r}'s battery drains {battery.drain_per_second}/s and "
             f"charges {battery.charge_rate}/s, so it cannot reach {to} by charging"
         )
-    steps = 0
-    while soc < to and steps < _MAX_CHARGE_STEPS:
-        soc = min(1.0, max(0.0, soc + gain))
-        steps += 1
+    if steps == 0:
+        return 0.0
     return (steps - 0.5) * dt  # a wait ends at the first step it covers: exactly ``steps``
 
 

@@ -110,6 +110,17 @@ class Controller(AttributeState):
     def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Advance this controller for one step of ``dt`` seconds."""
 
+    def wake_time(self) -> float | None:
+        """When this controller next needs :meth:`compute`, for controllers that act only on
+        a free agent.
+
+        A controller that returns a number promises that ``compute`` changes nothing while
+        its agent is moving or while ``sim_time + 1e-9 < wake_time()``; the fleet then calls
+        it only at steps where neither holds (``-inf``: as soon as the agent is free;
+        ``inf``: never again). None (the default): call ``compute`` every step.
+        """
+        return None
+
     @property
     def is_base(self) -> bool:
         """Whether this controller moves the agent (index 0 of the chain)."""
@@ -271,6 +282,15 @@ class PatrolController(Controller):
         self._waiting_until: float | None = None
         self._sent = False
 
+    def wake_time(self) -> float | None:
+        """-inf once the agent has arrived or before the first waypoint, the end of the pause
+        while pausing, inf when finished (see :meth:`Controller.wake_time`)."""
+        if self.finished:
+            return math.inf
+        if self._sent or self._waiting_until is None:
+            return -math.inf
+        return self._waiting_until
+
     def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Send the next waypoint once the agent has arrived and waited."""
         if self.finished or agent.is_moving or agent.get_current_action() is not None:
@@ -335,6 +355,15 @@ class RandomWalkController(Controller):
         self._rng = np.random.default_rng([0, *key]) if host is None else host.rng_for(*key)
         if self.center is None:
             self.center = agent.get_pose().position.copy()
+
+    def wake_time(self) -> float | None:
+        """-inf after a move or before the first, the end of the pause while pausing (see
+        :meth:`Controller.wake_time`)."""
+        if self._rng is None:
+            return None
+        if self._moved or self._waiting_until is None:
+            return -math.inf
+        return self._waiting_until
 
     def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Pick a new point once the agent has stopped and waited."""

@@ -207,6 +207,12 @@ class KinematicEngine(SlotTable):
             and (np.count_nonzero(self.vel[slot]) or np.count_nonzero(self.cmd[slot]))
         )
 
+    def moving_mask(self, slots: np.ndarray) -> np.ndarray:
+        """Whether each of ``slots`` is moving: :meth:`is_moving` for many slots at once."""
+        mode = self.mode[slots]
+        turning = self.vel[slots].any(axis=1) | self.cmd[slots].any(axis=1)
+        return (mode == POSE) | ((mode == VELOCITY) & turning)
+
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""
         plan = self._plans[slot]

@@ -99,11 +99,8 @@ class IdleSteps:
             if not free:
                 return 0
             free = schedule.steps_until_due(step, dt, free)
-        if world.has_object_callbacks():
-            for obj in world.objects_with_callbacks():
-                if not free:
-                    return 0
-                free = obj.callback_steps_until_due(step, dt, free)
+        if free and world.has_object_callbacks():
+            free = world.object_callback_steps(step, dt, free)
         return free
 
     def skip(self, step: int, n: int) -> None:
@@ -132,8 +129,11 @@ class IdleApi:
 
         A step is empty when running it would change nothing but the clock: no body moves or
         is due to (no path or velocity command in the kinematic engine, no joint moving, no
-        agent that just stopped still to have its velocity zeroed), no high-level controller,
-        agent plugin or ``update(dt)`` override runs, no callback, plugin or per-object
+        agent that just stopped still to have its velocity zeroed), no high-level controller
+        is due (a patrol or random walk only when its pause ends; a controller without a
+        ``wake_time`` every step), no agent plugin that overrides ``on_step`` (batteries do
+        not: a standing robot's charge follows a formula) and no ``update(dt)`` override
+        runs, no callback, plugin or per-object
         callback is due, no action is due to start, be polled or time out, no collision check
         has anything new to examine (nothing moved and no object joined or left since the last
         check), nothing is subscribed to PRE_STEP / POST_STEP / PRE_UPDATE / POST_UPDATE on

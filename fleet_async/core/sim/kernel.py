@@ -116,6 +116,7 @@ class SimulationKernel(
         self._joint_motion = JointMotion(self._fleet.wake_action)
         self._motion_systems: list[MotionSystem] = [self._fleet, self._joint_motion]
         self._step_observers: list[Callable[[int], None]] = []
+        self._early_observers: list[Callable[[int], None]] = []  # before POST_STEP handlers
         self._step_count = 0
         self._collision_count = 0
         self._paused = False
@@ -287,22 +288,27 @@ class SimulationKernel(
         if system in self._motion_systems:
             self._motion_systems.remove(system)
 
-    def add_step_observer(self, observer: Callable[[int], None]) -> None:
-        """Call ``observer(step_count)`` at the end of every step, after the POST_STEP handlers.
+    def add_step_observer(
+        self, observer: Callable[[int], None], *, before_handlers: bool = False
+    ) -> None:
+        """Call ``observer(step_count)`` at the end of every step, after the POST_STEP handlers
+        (``before_handlers``: before them, seeing the state as the step's phases left it).
 
-        An observer only watches (a trace writer): it must not change the simulation. Unlike a
-        POST_STEP handler it therefore does not make every step count for :meth:`idle_steps`,
-        so the drivers still skip empty steps; it hears of a skipped span from the
-        STEPS_SKIPPED event instead.
+        An observer only watches (a trace writer, the KPI collector): it must not change the
+        simulation. Unlike a POST_STEP handler it therefore does not make every step count
+        for :meth:`idle_steps`, so the drivers still skip empty steps; it hears of a skipped
+        span from the STEPS_SKIPPED event instead.
         """
-        if observer not in self._step_observers:
-            self._step_observers.append(observer)
+        observers = self._early_observers if before_handlers else self._step_observers
+        if observer not in observers:
+            observers.append(observer)
 
     def remove_step_observer(self, observer: Callable[[int], None]) -> bool:
         """Stop calling ``observer``; return whether it was added."""
-        if observer in self._step_observers:
-            self._step_observers.remove(observer)
-            return True
+        for observers in (self._step_observers, self._early_observers):
+            if observer in observers:
+                observers.remove(observer)
+                return True
         return False
 
     # ----- the step loop ------------------------------------------------------------------
@@ -365,8 +371,7 @@ class SimulationKernel(
             callback(self, elapsed)
         for on_step, elapsed in self._plugin_schedule.due(now, dt):
             on_step(elapsed)
-        for obj in self._world.objects_with_callbacks():
-            obj.execute_callbacks(now)
+        self._world.run_object_callbacks(self._step_count, now, dt)
 
     def _phase_motion(self) -> None:
         dt = self._params.timestep
@@ -396,6 +401,9 @@ class SimulationKernel(
 
     def _phase_post_step(self) -> None:
         self._step_count += 1
+        if self._early_observers:
+            for observer in tuple(self._early_observers):
+                observer(self._step_count)
         if self.events.has_handlers(SimEvents.POST_STEP):
             self.events.emit(
                 SimEvents.POST_STEP,

@@ -64,6 +64,12 @@ class AttachmentSet(Generic[_B]):
         self._plan: (
             list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[Attachment[_B]]]] | None
         ) = None
+        # Per plan level: the parent and child poses the last pass saw (None: not yet).
+        self._seen: list[tuple[np.ndarray, np.ndarray] | None] = []
+        self.incremental = True
+        """Recompute only the children whose parent or own pose changed since the last pass
+        (False: every child every step, the reference the incremental pass is tested
+        against; both give the same bits)."""
 
     def __len__(self) -> int:
         return len(self._by_child)
@@ -73,6 +79,7 @@ class AttachmentSet(Generic[_B]):
         self._by_child[attachment.child.object_id] = attachment
         self._children.setdefault(attachment.parent.object_id, []).append(attachment)
         self._plan = None
+        self._seen = []
 
     def remove(self, child: _B) -> Attachment[_B] | None:
         """Drop the attachment holding ``child``; return it, or None if it had none."""
@@ -84,6 +91,7 @@ class AttachmentSet(Generic[_B]):
         if not siblings:
             del self._children[att.parent.object_id]
         self._plan = None
+        self._seen = []
         return att
 
     def clear(self) -> None:
@@ -91,6 +99,7 @@ class AttachmentSet(Generic[_B]):
         self._by_child.clear()
         self._children.clear()
         self._plan = None
+        self._seen = []
 
     def of_child(self, child: _B) -> Attachment[_B] | None:
         """The attachment holding ``child``, if any."""
@@ -133,20 +142,59 @@ class AttachmentSet(Generic[_B]):
             self.place_child(att)
 
     def follow_all(self) -> None:
-        """Make every child follow its parent, parents before children (once per step)."""
+        """Make every child follow its parent, parents before children (once per step).
+
+        A child whose parent and own pose are as the last pass left them is where it
+        belongs already, so only the others are composed (one gather and compare per level
+        instead of the quaternion arithmetic for every carried object)."""
         if not self._by_child:
             return
         if self._plan is None:
             self._plan = self._build_plan()
-        store = self._store
-        for parent_rows, child_rows, rel_pos, rel_orn, link_atts in self._plan:
+            self._seen = [None] * len(self._plan)
+        for level, (parent_rows, child_rows, rel_pos, rel_orn, link_atts) in enumerate(self._plan):
             if len(child_rows):
-                pos, orn = compose_poses_batch(
-                    store.position[parent_rows], store.orientation[parent_rows], rel_pos, rel_orn
-                )
-                self._write(child_rows, pos, orn)
+                self._follow_level(level, parent_rows, child_rows, rel_pos, rel_orn)
             for att in link_atts:
                 self.place_child_only(att)
+
+    def _follow_level(
+        self,
+        level: int,
+        parent_rows: np.ndarray,
+        child_rows: np.ndarray,
+        rel_pos: np.ndarray,
+        rel_orn: np.ndarray,
+    ) -> None:
+        store = self._store
+        # One (N, 14) row per attachment: parent position, orientation, child position, ...
+        now = np.concatenate(
+            (
+                store.position[parent_rows],
+                store.orientation[parent_rows],
+                store.position[child_rows],
+                store.orientation[child_rows],
+            ),
+            axis=1,
+        )
+        seen = self._seen[level]
+        if seen is None or not self.incremental:
+            pos, orn = compose_poses_batch(_packed(now, 0, 3), _packed(now, 3, 7), rel_pos, rel_orn)
+            self._write(child_rows, pos, orn)
+            now[:, 7:10], now[:, 10:14] = pos, orn
+            self._seen[level] = (now, child_rows)
+            return
+        last, _ = seen
+        stale = np.flatnonzero((now != last).any(axis=1))
+        if not len(stale):
+            return
+        fresh = now[stale]
+        pos, orn = compose_poses_batch(
+            _packed(fresh, 0, 3), _packed(fresh, 3, 7), rel_pos[stale], rel_orn[stale]
+        )
+        self._write(child_rows[stale], pos, orn)
+        last[stale, 0:7] = now[stale, 0:7]
+        last[stale, 7:10], last[stale, 10:14] = pos, orn
 
     def place_child_only(self, att: Attachment[_B]) -> None:
         """Place one child from its parent link without recursing (the plan orders depths)."""
@@ -206,3 +254,9 @@ class AttachmentSet(Generic[_B]):
                 )
             )
         return plan
+
+
+def _packed(rows: np.ndarray, start: int, stop: int) -> np.ndarray:
+    """Columns ``start:stop`` as a C-contiguous array: the composition then runs on the same
+    memory layout whether it covers every attachment or a few, so it gives the same bits."""
+    return np.ascontiguousarray(rows[:, start:stop])

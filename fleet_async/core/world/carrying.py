@@ -82,9 +82,10 @@ class Carrying(Generic[_B]):
                 "attach_object: give either relative_pose or keep_world_pose=True, not both"
             )
         try:
+            # The base needs no PyBullet body yet: a pending one stays pending.
             index = (
-                link_index(parent.body_id, link, physics_client_id=self._backend.client)
-                if parent.body_id >= 0
+                link_index(parent.server_body_id, link, physics_client_id=self._backend.client)
+                if parent.raw_body_id != -1 and not (type(link) is int and link == -1)
                 else -1
             )
         except UnknownNameError as exc:
@@ -111,8 +112,8 @@ class Carrying(Generic[_B]):
         row = child.state_row
         if not self._store.kinematic[row]:
             # A carried body is moved by its carrier, not by dynamics, until it is dropped.
-            self._saved_mass[child.object_id] = self._backend.body_mass(child.body_id)
-            self._backend.set_body_mass(child.body_id, 0.0)
+            self._saved_mass[child.object_id] = self._backend.body_mass(child.server_body_id)
+            self._backend.set_body_mass(child.server_body_id, 0.0)
             self._store.kinematic[row] = True
             self._dynamic_rows = self._dynamic_rows[self._dynamic_rows != row]
         self._attachments.place_child(att)
@@ -140,7 +141,7 @@ class Carrying(Generic[_B]):
         mass = self._saved_mass.pop(child.object_id, None)
         if mass is not None:
             row = child.state_row
-            self._backend.set_body_mass(child.body_id, mass)
+            self._backend.set_body_mass(child.server_body_id, mass)
             self._store.kinematic[row] = False
             self._dynamic_rows = np.append(self._dynamic_rows, row)
         if drop_pose is not None:

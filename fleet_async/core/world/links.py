@@ -82,6 +82,8 @@ def link_index(body_id: int, link: int | str, physics_client_id: int = 0) -> int
             (:class:`UnknownNameError`; the message lists the body's link names).
         TypeError: If ``link`` is neither an int nor a str.
     """
+    if type(link) is int and link == -1:
+        return -1  # the base, which every body has: no need to ask PyBullet's body list
     count, base = _body_info(body_id, physics_client_id)
     if not isinstance(link, str):
         return _checked_index(link, -1, count, "link", body_id)
@@ -126,7 +128,7 @@ def joint_index(body_id: int, joint: int | str, physics_client_id: int = 0) -> i
 
 def _body_info(body_id: int, client: int) -> tuple[int, str]:
     """Return the body's joint count and base link name; ValueError if there is no such body."""
-    count = p.getNumJoints(body_id, physicsClientId=client)  # raises if not connected
+    p.getNumJoints(body_id, physicsClientId=client)  # raises if not connected
     try:
         info = p.getBodyInfo(body_id, physicsClientId=client)
     except p.error:
@@ -137,6 +139,8 @@ def _body_info(body_id: int, client: int) -> tuple[int, str]:
             info = p.getBodyInfo(body_id, physicsClientId=client)
         except p.error as exc:
             raise ValueError(f"No body with id {body_id} in physics client {client}") from exc
+    # Read after the body list is current: a body it did not know reports no joints.
+    count = p.getNumJoints(body_id, physicsClientId=client)
     return count, info[0].decode("utf-8")
 
 

@@ -93,9 +93,10 @@ class PendingBodies:
         obj = self._groups[body].pop(row)
         _place(body, {row: obj}, store, client)
 
-    def create_all(self, store: KinematicState, client: int) -> bool:
+    def create_all(self, store: KinematicState, client: int, one_by_one: bool = False) -> bool:
         """Create every pending body at its row's current pose, in spawn order per group, and
-        hand each object its body id.
+        hand each object its body id (``one_by_one``: one PyBullet call per body, which
+        keeps the client-side body list current).
 
         Returns:
             Whether PyBullet's client-side body list now lacks some of them (a batch of more
@@ -106,18 +107,22 @@ class PendingBodies:
         self._of_row.clear()
         partial = False
         for body, members in groups.items():
-            partial |= _place(body, members, store, client)
+            partial |= _place(body, members, store, client, 1 if one_by_one else _CHUNK)
         return partial
 
 
 def _place(
-    body: PendingBody, members: dict[int, PendingHandle], store: KinematicState, client: int
+    body: PendingBody,
+    members: dict[int, PendingHandle],
+    store: KinematicState,
+    client: int,
+    chunk_size: int = _CHUNK,
 ) -> bool:
     """Create ``members``' bodies in chunks; return whether a chunk held more than one."""
     rows = list(members)
     partial = False
-    for start in range(0, len(rows), _CHUNK):
-        chunk = np.array(rows[start : start + _CHUNK], dtype=np.int64)
+    for start in range(0, len(rows), chunk_size):
+        chunk = np.array(rows[start : start + chunk_size], dtype=np.int64)
         ids = _create(body, store, chunk, client)
         partial |= len(ids) > 1
         store.body_id[chunk] = ids
@@ -176,9 +181,21 @@ class PendingBodiesApi:
         """Whether spawned objects wait for their PyBullet bodies to be created."""
         return len(self._pending) > 0
 
-    def create_pending_bodies(self) -> None:
-        """Create the PyBullet bodies of every object spawned with a pending body."""
-        if len(self._pending) and self._pending.create_all(self._store, self._backend.client):
+    def create_pending_bodies(self, for_raw_access: bool = False) -> None:
+        """Create the PyBullet bodies of every object spawned with a pending body.
+
+        Args:
+            for_raw_access: The caller will read PyBullet's client-side body list (a user's
+                ``obj.body_id``). Bodies created in one batch call would then need a
+                ``syncBodyInfo``, whose cost grows with every body in the world; when fewer
+                bodies are pending than exist already, they are created one call each
+                instead, so a spawn loop that reads ``body_id`` stays linear.
+        """
+        pending = len(self._pending)
+        if not pending:
+            return
+        one_by_one = for_raw_access and pending <= self._store.count - pending
+        if self._pending.create_all(self._store, self._backend.client, one_by_one=one_by_one):
             self._body_list_stale = True
 
     def create_pending_body(self, row: int) -> None:

@@ -19,6 +19,7 @@ from fleet_async.core.base.events import EventBus, SimEvents
 from fleet_async.core.base.types import CollisionMode
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
+from fleet_async.core.world.callback_queue import CallbackQueue
 from fleet_async.core.world.carrying import Carrying
 from fleet_async.core.world.pending import (
     PENDING_BODY,
@@ -70,6 +71,10 @@ class World(Carrying[_B], PendingBodiesApi):
         self._agents: dict[int, _B] = {}
         self._updaters: dict[int, _B] = {}
         self._with_callbacks: dict[int, _B] = {}
+        self._callback_queue = CallbackQueue()
+        self.scan_callbacks = False
+        """Check every object's callbacks every step (the reference the callback queue is
+        tested against) instead of popping the due ones from the queue."""
         self._update_listeners: dict[int, _B] = {}
         self._dynamic_rows = np.empty(0, dtype=np.int64)
         self._saved_mass: dict[int, float] = {}
@@ -164,6 +169,7 @@ class World(Carrying[_B], PendingBodiesApi):
             obj.unbind()
         for registry in self._registries():
             registry.clear()
+        self._callback_queue.clear()
         self._attachments.clear()
         self._pending.clear()
         self._body_list_stale = False
@@ -216,6 +222,7 @@ class World(Carrying[_B], PendingBodiesApi):
             self._updaters[object_id] = obj
         if obj.has_callbacks():
             self._with_callbacks[object_id] = obj
+            self._callback_queue.changed(obj)
         if obj.has_event_bus():
             self._entity_buses = True
             self.on_entity_handlers_changed(obj)
@@ -371,11 +378,11 @@ class World(Carrying[_B], PendingBodiesApi):
             return
         if new is CollisionMode.DISABLED:
             p.setCollisionFilterGroupMask(
-                obj.body_id, -1, 0, 0, physicsClientId=self._backend.client
+                obj.server_body_id, -1, 0, 0, physicsClientId=self._backend.client
             )
         elif old is CollisionMode.DISABLED:
             p.setCollisionFilterGroupMask(
-                obj.body_id, -1, 1, -1, physicsClientId=self._backend.client
+                obj.server_body_id, -1, 1, -1, physicsClientId=self._backend.client
             )
 
     def on_object_callbacks_changed(self, obj: _B) -> None:
@@ -384,6 +391,7 @@ class World(Carrying[_B], PendingBodiesApi):
             self._with_callbacks[obj.object_id] = obj
         else:
             self._with_callbacks.pop(obj.object_id, None)
+        self._callback_queue.changed(obj)
 
     def on_entity_handlers_changed(self, obj: _B) -> None:
         """Track which objects listen to their own PRE_UPDATE / POST_UPDATE (only those pay)."""
@@ -402,6 +410,24 @@ class World(Carrying[_B], PendingBodiesApi):
     def has_object_callbacks(self) -> bool:
         """Whether any object has per-object callbacks."""
         return bool(self._with_callbacks)
+
+    def run_object_callbacks(self, step: int, now: float, dt: float) -> None:
+        """Run the per-object callbacks due at step ``step`` (sim time ``now``), objects in
+        the order they first registered one (``world/callback_queue.py``)."""
+        if not self._with_callbacks:
+            return
+        if self.scan_callbacks:
+            for obj in tuple(self._with_callbacks.values()):
+                obj.execute_callbacks(now)
+            return
+        self._callback_queue.run(self._with_callbacks, step, now, dt)
+
+    def object_callback_steps(self, step: int, dt: float, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) run before a per-object
+        callback is due."""
+        if not self._with_callbacks:
+            return limit
+        return self._callback_queue.steps_until_due(self._with_callbacks, step, dt, limit)
 
     def has_update_listeners(self) -> bool:
         """Whether any object listens to its own PRE_UPDATE / POST_UPDATE."""
@@ -448,7 +474,7 @@ class World(Carrying[_B], PendingBodiesApi):
         """World (position, orientation) of one link of ``obj``, from PyBullet's kinematics."""
         self.sync_object(obj)
         state = p.getLinkState(
-            obj.body_id,
+            obj.server_body_id,
             link_index,
             computeForwardKinematics=1,
             physicsClientId=self._backend.client,

@@ -1,0 +1,153 @@
+"""Which agents' high-level controllers the fleet calls in a step.
+
+A patrol or a random walk acts only when its agent is free (not moving) and its pause is over;
+every other step its ``compute`` returns at once. Calling it every step for every robot costs
+a Python call per robot per step, and stops idle steps from being skipped. Controllers that
+say when they next need a call (``Controller.wake_time``) are therefore *woken*: each step one
+numpy pass picks the agents whose wake time has come and whose engine slot is not moving, and
+only those are called, in the order the agents joined. A call at a step where the controller
+would have done nothing is harmless, so the pass only has to be conservative, never exact.
+Controllers that do not say (user controllers, a custom base controller) are called every step,
+as is every controller on the per-robot reference path (``FleetMotion.reference_path``).
+
+A controller's wake time is read again after each call, when its agent's chain changes
+(``FleetMotion.track``) and when the clock jumps other than by a skip (a restored checkpoint,
+``initialize_simulation``). Changing a controller's attributes by hand between steps takes
+effect at its next wake; ``agent.set_controller`` re-reads it at once.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fleet_async.core.motion.controllers import KinematicController
+
+if TYPE_CHECKING:
+    from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.motion.kinematics import KinematicEngine
+
+__all__ = ["ControllerSchedule"]
+
+_TOLERANCE = 1e-9  # s: the controllers' own "now + 1e-9 < wake" test
+
+
+def _wake(agent: Agent) -> float | None:
+    """The earliest wake time of ``agent``'s high-level controllers; None if one of them
+    (or a custom base controller) needs every step."""
+    base = agent.controller
+    if not (isinstance(base, KinematicController) and base.vectorized):
+        return None
+    wake = math.inf
+    for ctrl in agent.controllers[1:]:
+        when = ctrl.wake_time()
+        if when is None:
+            return None
+        wake = min(wake, when)
+    return wake
+
+
+class ControllerSchedule:
+    """The controlled agents of one fleet: called every step, or woken."""
+
+    def __init__(self) -> None:
+        self._every: dict[int, Agent] = {}
+        self._woken: dict[int, Agent] = {}
+        self._agents: list[Agent] = []
+        self._slots = np.zeros(0, dtype=np.int64)
+        self._wakes = np.zeros(0)
+        self._stale = False
+        self._expected = -1  # the step the wake times are current for
+        self.reference = False
+
+    def __bool__(self) -> bool:
+        return bool(self._every or self._woken)
+
+    @property
+    def polls_every_step(self) -> bool:
+        """Whether some agent's controllers are called every step."""
+        return bool(self._every)
+
+    def track(self, agent: Agent, controlled: bool) -> None:
+        """Re-read how ``agent``'s controllers are called (``controlled``: it has any)."""
+        key = agent.object_id
+        self.forget(agent)
+        if not controlled:
+            return
+        if not self.reference and _wake(agent) is not None:
+            self._woken[key] = agent
+            self._stale = True
+        else:
+            self._every[key] = agent
+
+    def forget(self, agent: Agent) -> None:
+        """Stop calling ``agent``'s controllers."""
+        key = agent.object_id
+        self._every.pop(key, None)
+        if self._woken.pop(key, None) is not None:
+            self._stale = True
+
+    def clear(self) -> None:
+        """Forget every agent."""
+        self._every.clear()
+        self._woken.clear()
+        self._stale = True
+
+    def agents(self) -> list[Agent]:
+        """Every controlled agent."""
+        return [*self._every.values(), *self._woken.values()]
+
+    def skipped(self, next_step: int) -> None:
+        """Steps were skipped up to ``next_step`` (nothing was due: the wakes still hold)."""
+        if self._expected >= 0:
+            self._expected = next_step
+
+    def run(self, engine: KinematicEngine, step: int, now: float, dt: float) -> None:
+        """Call the controllers due at step ``step`` (sim time ``now``)."""
+        for agent in tuple(self._every.values()):
+            agent.step_controllers(dt)
+        if not self._woken:
+            return
+        if self._stale or step != self._expected:
+            self._rebuild()
+        self._expected = step + 1
+        due = np.flatnonzero(now + _TOLERANCE >= self._wakes)
+        if not len(due):
+            return
+        due = due[~engine.moving_mask(self._slots[due])]
+        agents, wakes = self._agents, self._wakes
+        for k in due.tolist():
+            agent = agents[k]
+            agent.step_controllers(dt)
+            wake = _wake(agent)
+            wakes[k] = -math.inf if wake is None else wake
+
+    def idle_steps(self, step: int, dt: float, limit: int) -> int:
+        """How many steps from ``step`` on (at most ``limit``) call no controller, given that
+        no agent moves."""
+        if self._every:
+            return 0
+        if not self._woken:
+            return limit
+        if self._stale or step != self._expected:
+            self._rebuild()
+            self._expected = step
+        first = float(self._wakes.min())
+        if first == math.inf:
+            return limit
+        if first == -math.inf:
+            return 0
+        k = max(step, math.ceil((first - _TOLERANCE) / dt) - 1)
+        while k * dt + _TOLERANCE < first:  # the controllers' own test decides
+            k += 1
+        return min(limit, max(0, k - step))
+
+    def _rebuild(self) -> None:
+        agents = list(self._woken.values())
+        self._agents = agents
+        self._slots = np.array([a.motion_slot for a in agents], dtype=np.int64)
+        wakes = [_wake(a) for a in agents]
+        self._wakes = np.array([-math.inf if w is None else w for w in wakes])
+        self._stale = False
