@@ -128,9 +128,12 @@ class Driver:
         while True:
             if self.until_step is not None and kernel.now >= self.until_step:
                 if self.then == "cancel":
-                    await self._cancel_at_until()
+                    await self._cancel_now("run(until=..., then='cancel') was reached")
                 return
             await dispatch(kernel)
+            if runtime.root.errors:  # the run fails now: what is left ends at this time
+                await self._cancel_now("a mission failed and the run stops")
+                return
             if anyio.current_effective_deadline() == -math.inf and not self.scope.cancel_called:
                 runtime.root.fail(_anyio_scope_misuse(kernel))
                 continue  # the missions' cancellations are due at once; no checkpoint first
@@ -242,15 +245,16 @@ class Driver:
             return
         runtime.step()
 
-    async def _cancel_at_until(self) -> None:
-        """``then="cancel"``: cancel every mission; let their cleanup run at this step (no
-        more steps). The events that were due at this step are not processed."""
+    async def _cancel_now(self, why: str) -> None:
+        """End the run at this step: cancel every mission and let their cleanup run at this
+        step (no more steps), then close those still waiting. The events that were due at
+        this step and not processed yet are dropped (SimPy's ``run(until=t)``)."""
         runtime, kernel = self.runtime, self.runtime.kernel
         kernel.drop_due()
         runtime.root.cancel_scope.cancel()
         await dispatch(kernel)
         if kernel.missions:
-            runtime.close_missions("run(until=..., then='cancel') was reached")
+            runtime.close_missions(why)
 
     async def watch(self) -> None:
         """The watchdog of non-sim awaits: fails the run when a mission holds the clock on

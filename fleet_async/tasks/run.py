@@ -89,7 +89,9 @@ def run(
         BaseException: a mission's failure, as itself when it is the only one (with the
             mission's name and the sim time in its notes); several concurrent failures as an
             ExceptionGroup. A failed event that nobody waited on (and nobody defused), with
-            a note naming it.
+            a note naming it. The run stops at the sim time of the failure: the other
+            missions are cancelled then, their cleanup runs at that time, and what still
+            waits is closed.
         MissionDeadlockError: missions are alive and nothing will ever wake them (see
             ``on_deadlock``; always for ``until=event`` when the event can no longer come),
             including missions that wait on a ``sim.wait_until`` predicate while nothing in

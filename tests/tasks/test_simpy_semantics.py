@@ -195,6 +195,36 @@ def test_each_waiter_gets_its_own_copy_of_a_failure_chained_to_the_original(back
         assert first.__cause__ is second.__cause__ is alarm.value
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("until", [None, 2.0, 20.0])
+def test_a_run_fails_at_the_time_of_the_failure_whatever_until(backend, until):
+    """The failure's time, not ``until``, ends the run: a cut run and an uncut one agree."""
+    with _sim() as sim:
+        log = []
+
+        async def careful():
+            try:
+                await sim.sleep(100)
+            finally:
+                with sim.cancel_scope(shield=True):
+                    log.append(("cleanup", sim.now))
+                    await sim.sleep(5)  # would outlast the failure: closed instead
+                    log.append(("parked", sim.now))
+
+        async def failing():
+            await sim.sleep(1)
+            raise KeyError("broken")
+
+        async def main():
+            sim.spawn(careful)
+            sim.spawn(failing)
+
+        with pytest.raises(KeyError, match="broken"):
+            fa.run(sim, main, until=until, backend=backend)
+        assert log == [("cleanup", 1.0)] and sim.sim_time == 1.0
+        assert sim.suspended_missions() == []
+
+
 # ----- requests: interrupts, conservation, preemption ------------------------------------
 
 
