@@ -95,6 +95,7 @@ class KinematicEngine(SlotTable):
         self._free: list[int] = []
         self._stopped: list[int] = []  # slots that arrived last step: zero their velocity next
         self._plans: list[_Plan | None] = []
+        self._scale: np.ndarray | None = None  # per slot: time scale of this step (fields)
         super().__init__()
         self._alloc(16)
 
@@ -102,6 +103,7 @@ class KinematicEngine(SlotTable):
 
     def _alloc(self, cap: int) -> None:
         super()._alloc(cap)
+        self._scale = None
         self._plans.extend([None] * (cap - len(self._plans)))
 
     def add(self, row: int, kind: int, limits: MotionLimits) -> int:
@@ -138,6 +140,24 @@ class KinematicEngine(SlotTable):
         self.alpha[slot] = limits.max_angular_accel
         self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
         self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
+
+    def set_time_scale(self, scale_of_row: np.ndarray | None) -> None:
+        """Scale the next step's progress along each slot's path by its store row's entry.
+
+        0 holds a slot where it is (its path and profile wait, to resume from where they
+        stopped), 0.5 drives it at half its speed; None (the default) drives every slot as
+        planned. Set before each step by the safety fields (``collision/safety.py``);
+        velocity commands are not scaled.
+
+        Args:
+            scale_of_row: (rows,) floats indexed by store row, covering every slot's row.
+        """
+        if scale_of_row is None:
+            self._scale = None
+            return
+        rows = self.row  # every slot's, so a slot added during the step has an entry
+        known = (rows >= 0) & (rows < len(scale_of_row))
+        self._scale = np.where(known, scale_of_row[np.where(known, rows, 0)], 1.0)
 
     # ----- checkpoints ----------------------------------------------------------------------
 
@@ -193,6 +213,10 @@ class KinematicEngine(SlotTable):
             mode == VELOCITY
             and (np.count_nonzero(self.vel[slot]) or np.count_nonzero(self.cmd[slot]))
         )
+
+    def path_rows(self) -> np.ndarray:
+        """Store rows of the slots following a path (POSE mode), ascending by slot."""
+        return self._moving_slots()[1]
 
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""
@@ -413,7 +437,7 @@ class KinematicEngine(SlotTable):
         # few dozen numpy calls, so each one saved counts.
         f = self._move_block.take(s, axis=1)  # (columns, slots): f[AT[name]] is one column
         store = self._store
-        steps = f[AT["steps"]] + 1.0
+        steps = f[AT["steps"]] + (1.0 if self._scale is None else self._scale[s])
         # The step in which the profile's end falls is the arrival step (t_arrive: t_end less
         # the float error of k * dt, so that 14 steps of 0.1 s cover a 1.4 s segment).
         elapsed = steps * dt
