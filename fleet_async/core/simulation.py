@@ -49,6 +49,7 @@ class MultiRobotSimulationCore(
         self, params: SimulationParams | None = None, collision_color: Sequence[float] | None = None
     ) -> None:
         super().__init__(params, collision_color)
+        self.safety.recorder = self.trace_event  # safety stops and deadlocks in the trace
         self._start_gui_camera()
 
     def run_simulation(self, duration: float | None = None) -> None:

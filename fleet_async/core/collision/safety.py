@@ -43,6 +43,9 @@ if TYPE_CHECKING:
 __all__ = ["FieldMotion", "SafetyFields"]
 
 
+_MULTI_CELL = 16.0  # cells a box may span per axis and still be hashed (a field is long)
+
+
 class FieldMotion(Protocol):
     """What the fields need of the agents' motion (``agents/fleet.py``)."""
 
@@ -89,6 +92,7 @@ class SafetyFields:
         self._static_hi = np.zeros((0, 3))
         self._transparent: set[int] = set()  # object ids the fields ignore (map bodies)
         self._cell: float | None = None
+        self._cell_n = 0  # boxes the cell size was chosen for
         self._layout = -1
         self.recorder: Callable[..., None] | None = None
         """Called ``recorder(kind, object_id, **data)`` for each stop, end and deadlock (the
@@ -229,26 +233,43 @@ class SafetyFields:
         n_obj = len(rows)
         box_lo = np.concatenate((lo, self._static_lo))
         box_hi = np.concatenate((hi, self._static_hi))
+        n_box = len(box_lo)
         owners = active.nonzero()[0]
         f_lo, f_hi = shapes.bounds(table.warning_depth)
         f_lo, f_hi = f_lo[owners], f_hi[owners]
         z_lo, z_hi = table.z_band(owners)
-        all_lo = np.concatenate((box_lo, np.column_stack((f_lo, z_lo))))
-        all_hi = np.concatenate((box_hi, np.column_stack((f_hi, z_hi))))
+        # An owner's own box grows to cover its field (one box per robot, not two); owners
+        # without collision geometry get a box of their own after the obstacles'.
+        at = np.searchsorted(rows, table.rows[owners])
+        own = at < n_obj
+        own[own] = rows[at[own]] == table.rows[owners][own]
+        place = np.where(own, at, n_box + np.cumsum(~own) - 1)
+        extra = int(np.count_nonzero(~own))
+        all_lo = np.concatenate((box_lo, np.zeros((extra, 3))))
+        all_hi = np.concatenate((box_hi, np.zeros((extra, 3))))
+        field_lo = np.column_stack((f_lo, z_lo))
+        field_hi = np.column_stack((f_hi, z_hi))
+        all_lo[place] = np.where(own[:, None], np.minimum(all_lo[place], field_lo), field_lo)
+        all_hi[place] = np.where(own[:, None], np.maximum(all_hi[place], field_hi), field_hi)
         moved = np.zeros(len(all_lo), dtype=bool)
-        moved[len(box_lo) :] = True
-        if self._cell is None:
-            self._cell = auto_cell_size(all_lo, all_hi)
-        pairs = candidate_pairs(
-            all_lo, all_hi, None, moved, self._cell, self._collision.multi_cell_threshold
-        )
-        n_box = len(box_lo)
-        pairs = pairs[(pairs[:, 0] < n_box) & (pairs[:, 1] >= n_box)]
-        obstacle, field = pairs[:, 0], pairs[:, 1] - n_box
-        owner = owners[field]
+        moved[place] = True
+        owner_of = np.full(len(all_lo), -1, dtype=np.int64)
+        owner_of[place] = owners
+        if self._cell is None or not (0.5 * self._cell_n <= n_box <= 2 * self._cell_n):
+            self._cell = auto_cell_size(box_lo, box_hi) if n_box else 1.0
+            self._cell_n = n_box
+        pairs = candidate_pairs(all_lo, all_hi, None, moved, self._cell, _MULTI_CELL)
+        # Each pair is tested both ways: field of one side's owner vs the other side's box.
+        a, b = pairs[:, 0], pairs[:, 1]
+        ab = (owner_of[a] >= 0) & (b < n_box)
+        ba = (owner_of[b] >= 0) & (a < n_box)
+        field = np.concatenate((a[ab], b[ba]))
+        obstacle = np.concatenate((b[ab], a[ba]))
+        owner = owner_of[field]
+        zi = np.searchsorted(owners, owner)
         obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)
         keep = obstacle_row != table.rows[owner]
-        keep &= (box_hi[obstacle, 2] >= z_lo[field]) & (box_lo[obstacle, 2] <= z_hi[field])
+        keep &= (box_hi[obstacle, 2] >= z_lo[zi]) & (box_lo[obstacle, 2] <= z_hi[zi])
         keep &= table.not_carried(owner, obstacle_row, self._sim.world)
         owner, obstacle, obstacle_row = owner[keep], obstacle[keep], obstacle_row[keep]
         u, w, half_w = shapes.u[owner], shapes.w[owner], shapes.half_w[owner]

@@ -117,6 +117,7 @@ def reference_timings(
         "phase3_aabb_grid_flush": 0.0 if collision is None else collision["get_aabbs"],
         "agent_update": measured["agent_update"],
         "attachments": measured["attachments"],
+        "safety_fields": measured.get("safety_fields", 0.0),
         "callbacks": measured["callbacks"],
         "step_simulation": measured.get("step_simulation", 0.0),
         "collision_check": measured["collision_check"],
