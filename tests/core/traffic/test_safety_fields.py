@@ -234,3 +234,29 @@ def test_the_deadlock_watch_reports_a_set_once_after_its_time():
     assert watch.count == 1
     with pytest.raises(ValueError, match="deadlock_after"):
         watch.deadlock_after = 0
+
+
+def test_kpis_count_stops_time_stopped_and_deadlocks():
+    with make_sim() as sim:
+        sim.safety.deadlock_after = 2.0
+        kpis = sim.kpis()
+        a = robot(sim, 0.0, name="a")
+        b = robot(sim, 4.0, name="b", yaw=3.141592653589793)
+        a.set_path([Pose.from_xyz(4.0, 0.0, 0.2)])
+        b.set_path([Pose.from_xyz(0.0, 0.0, 0.2)])
+        for _ in range(100):
+            sim.step_once()
+        stats = sim.safety.stats()
+        rows = {r.robot: r for r in kpis.per_robot()}
+        assert (rows["a"].safety_stops, rows["a"].safety_stopped_time_s) == stats[a.object_id]
+        assert rows["b"].safety_stops == stats[b.object_id][0] >= 1
+        summary = kpis.summary()
+        assert summary.safety_stops == rows["a"].safety_stops + rows["b"].safety_stops
+        assert summary.safety_stopped_time_total_s == pytest.approx(
+            rows["a"].safety_stopped_time_s + rows["b"].safety_stopped_time_s
+        )
+        assert summary.deadlocks_suspected == 1
+        kpis.stop()
+        for _ in range(10):
+            sim.step_once()
+        assert kpis.summary().safety_stopped_time_total_s == summary.safety_stopped_time_total_s
