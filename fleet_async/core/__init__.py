@@ -65,6 +65,7 @@ from fleet_async.core.bodies.models import (
 from fleet_async.core.bodies.sim_object import ObjectRemovedError, SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.checkpoint.format import CheckpointError
+from fleet_async.core.collision.safety_params import SafetyFieldParams
 from fleet_async.core.devices import (
     DispenseAction,
     Door,
@@ -100,6 +101,13 @@ from fleet_async.core.motion.controllers import (
     register_controller,
 )
 from fleet_async.core.motion.ik import IKParams
+from fleet_async.core.routes import (
+    FollowRouteAction,
+    RouteEdge,
+    RouteGraph,
+    RouteNode,
+    load_route_graph,
+)
 from fleet_async.core.scenario.world_loader import WorldLoadError, WorldLoadFailure
 from fleet_async.core.sim.plugins import SimPlugin
 from fleet_async.core.simulation import MultiRobotSimulationCore
@@ -142,6 +150,7 @@ __all__ = [
     "ElevatorState",
     "EventBus",
     "FleetKpis",
+    "FollowRouteAction",
     "GridSpawnParams",
     "IKParams",
     "IngestAction",
@@ -165,6 +174,10 @@ __all__ = [
     "PosePhase",
     "RandomWalkController",
     "RobotKpis",
+    "RouteEdge",
+    "RouteGraph",
+    "RouteNode",
+    "SafetyFieldParams",
     "ShapeParams",
     "SimEvents",
     "SimObject",
@@ -190,6 +203,7 @@ __all__ = [
     "list_model_search_paths",
     "list_models",
     "load_config",
+    "load_route_graph",
     "load_yaml_config",
     "merge_configs",
     "register_controller",

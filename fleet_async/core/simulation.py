@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.checkpoint.api import CheckpointApi
 from fleet_async.core.metrics.kpis import KpiApi
+from fleet_async.core.routes.api import RoutesApi
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
@@ -34,6 +35,7 @@ class MultiRobotSimulationCore(
     MonitorApi,
     GuiApi,
     KpiApi,
+    RoutesApi,
     CheckpointApi,
     SimulationKernel,
 ):

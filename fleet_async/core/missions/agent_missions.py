@@ -21,6 +21,8 @@ from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.missions.errors import ExternallyDrivenError, NoMissionRuntimeError
+from fleet_async.core.routes.api import graph_of
+from fleet_async.core.routes.follow import route_to_node
 
 if TYPE_CHECKING:
     from fleet_async.core.missions.host import MissionAgent
@@ -72,6 +74,11 @@ class AgentMissionApi:
             path = list(path)  # MoveAction names what it got when this is not Poses
         action = MoveAction(path=path, **options)  # type: ignore[arg-type]  # takes a Pose too
         return self.submit(action)
+
+    def go_to_node(self, node_id: str) -> Any:
+        """Drive the quickest route of the simulation's route graph from the nearest node to
+        ``node_id``, each edge at its speed limit (``routes/follow.py``)."""
+        return self.submit(route_to_node(self, graph_of(self), node_id))
 
     def pick(self, target: Any = None, **options: Any) -> Any:
         """Pick ``target`` (a SimObject or body id), or pass PickAction options such as
