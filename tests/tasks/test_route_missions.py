@@ -31,4 +31,3 @@ async def test_go_to_node_without_a_graph_says_so(fleet_sim):
     )
     with pytest.raises(RuntimeError, match="no route graph"):
         await r.go_to_node("C")
-
