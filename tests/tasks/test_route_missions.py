@@ -20,8 +20,8 @@ async def test_go_to_node_drives_the_quickest_route(fleet_sim):
     action = await r.go_to_node("C")
     assert [leg.edge_id for leg in action.legs] == ["AB", "BC"]
     # two 4 m edges at 2 m/s and 5 m/s^2 (2.4 s each, stopping at B), then the quarter turn
-    # to C's heading at 3 rad/s and 10 rad/s^2 (1.0 s)
-    assert fleet_sim.step_count == 58
+    # to C's heading at 3 rad/s and 10 rad/s^2 (0.9 s)
+    assert fleet_sim.step_count == 57
     assert (r.get_pose().x, r.get_pose().y) == pytest.approx((4.0, 4.0))
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from fleet_async.core.actions.action import TrackedAction
+from fleet_async.core.actions.action import TrackedAction, WaitHint
 from fleet_async.core.geometry.pose import Pose
 
 if TYPE_CHECKING:
@@ -93,6 +93,10 @@ class FollowRouteAction(TrackedAction):
                 return False
         _cap(agent, None)
         return True
+
+    def wait_hint(self) -> WaitHint:
+        """Waits for the end of each leg's motion (as MoveAction)."""
+        return ("motion", None)
 
     def on_cancel(self, agent: ActingAgent) -> None:
         """Lift the speed cap of the leg that was being driven."""
