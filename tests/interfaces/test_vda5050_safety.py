@@ -3,6 +3,9 @@ the fields in the factsheet's ``agvGeometry.envelopes2d`` (both valid against th
 
 from __future__ import annotations
 
+import itertools
+import json
+
 import pytest
 
 from fleet_async import Agent, AgentSpawnParams, Pose, ShapeParams, SimObject
@@ -81,3 +84,49 @@ def test_the_factsheet_lists_the_fields_as_envelopes(sim, version):
 def test_a_robot_without_fields_has_no_envelopes(sim):
     agent = robot(sim, None)
     assert describe(agent, Vda5050Config())["agvGeometry"] == {}
+
+
+def _order_naming_nodes(node_ids):
+    header = encode.Header(Vda5050Config(), "r0", 0.0).make("order", 0.0)
+    nodes = [
+        {"nodeId": n, "sequenceId": 2 * i, "released": True, "actions": []}
+        for i, n in enumerate(node_ids)
+    ]
+    edges = [
+        {
+            "edgeId": f"{a}-{b}",
+            "sequenceId": 2 * i + 1,
+            "released": True,
+            "startNodeId": a,
+            "endNodeId": b,
+            "actions": [],
+        }
+        for i, (a, b) in enumerate(itertools.pairwise(node_ids))
+    ]
+    return {**header, "orderId": "o1", "orderUpdateId": 0, "nodes": nodes, "edges": edges}
+
+
+def test_an_order_may_name_the_route_graphs_nodes_without_positions():
+    from pathlib import Path
+
+    from fleet_async import load_route_graph
+    from fleet_async.interfaces import Order, Rejection
+    from fleet_async.interfaces.vda5050.decode import decode
+
+    graph = load_route_graph(Path(__file__).parents[1] / "data" / "traffic" / "small.lif.json")
+    body = _order_naming_nodes(["n1", "n2", "n3"])
+    assert validation_errors("2.1.0", "order", body) == []
+    payload = json.dumps(body).encode()
+    topic = "order"
+    order = decode(topic, payload, Vda5050Config(route_graph=graph), "r0")
+    assert isinstance(order, Order)
+    assert [(n.node_id, n.x, n.y, n.theta, n.map_id) for n in order.nodes] == [
+        ("n1", 0.0, 0.0, 0.0, "level0"),
+        ("n2", 3.0, 0.0, None, "level0"),
+        ("n3", 3.0, 2.0, pytest.approx(1.5707963267948966), "level0"),
+    ]
+    refused = decode(topic, payload, Vda5050Config(), "r0")
+    assert isinstance(refused, Rejection) and "no nodePosition" in refused.description
+    unknown = json.dumps(_order_naming_nodes(["n1", "zz"])).encode()
+    refused = decode(topic, unknown, Vda5050Config(route_graph=graph), "r0")
+    assert isinstance(refused, Rejection) and "route graph has no such node" in refused.description
