@@ -87,6 +87,7 @@ from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.managers.sim_object_manager import SimObjectManager, register_entity_class
+from fleet_async.core.maps import GridMap, OccupancyGrid, read_movingai_scen
 from fleet_async.core.metrics.kpis import KpiCollector
 from fleet_async.core.metrics.rows import FleetKpis, RobotKpis
 from fleet_async.core.motion.controllers import (
@@ -151,6 +152,7 @@ __all__ = [
     "EventBus",
     "FleetKpis",
     "FollowRouteAction",
+    "GridMap",
     "GridSpawnParams",
     "IKParams",
     "IngestAction",
@@ -164,6 +166,7 @@ __all__ = [
     "MultiRobotSimulationCore",
     "NamedLazyLogger",
     "ObjectRemovedError",
+    "OccupancyGrid",
     "OmniController",
     "Path",
     "PatrolController",
@@ -206,6 +209,7 @@ __all__ = [
     "load_route_graph",
     "load_yaml_config",
     "merge_configs",
+    "read_movingai_scen",
     "register_controller",
     "register_entity_class",
     "register_model",

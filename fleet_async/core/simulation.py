@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.checkpoint.api import CheckpointApi
+from fleet_async.core.maps.api import MapsApi
 from fleet_async.core.metrics.kpis import KpiApi
 from fleet_async.core.routes.api import RoutesApi
 from fleet_async.core.scenario.build import ScenarioApi
@@ -36,6 +37,7 @@ class MultiRobotSimulationCore(
     GuiApi,
     KpiApi,
     RoutesApi,
+    MapsApi,
     CheckpointApi,
     SimulationKernel,
 ):
