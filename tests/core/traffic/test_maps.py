@@ -144,7 +144,7 @@ def test_safety_fields_stop_a_robot_before_a_maps_shelf():
         assert sim.safety.is_stopped(robot)
         # stopped before the shelf's edge (row 4's lower edge: y = 2.0 m) within its margin
         front = robot.get_pose().y - 0.2
-        assert 2.0 < front and front - 2.0 <= 0.1 + 1e-9
+        assert front > 2.0 and front - 2.0 <= 0.1 + 1e-9
 
 
 def test_an_unknown_map_kind_is_refused(tmp_path):
@@ -152,6 +152,6 @@ def test_an_unknown_map_kind_is_refused(tmp_path):
     path.write_text("x")
     with (
         MultiRobotSimulationCore(headless_params()) as sim,
-        pytest.raises(ValueError, match="m.txt"),
+        pytest.raises(ValueError, match=r"m\.txt"),
     ):
         sim.load_map(path)
