@@ -3,9 +3,11 @@
 N box robots (0.6 x 0.4 m, omnidirectional, fields on) stand on a grid 1.5 m apart in rows;
 each drives along its row to a goal 30 m away, so the robots of a row follow each other
 (warning fields see the robot ahead, protective fields stop some) and the rows stay apart.
-Reports the phase's mean time per step from the step profile (``safety_fields``), and the
-whole step's, over ``--steps`` steps after a warm-up; collision checks are off, so the figure
-is the fields' alone (they read the collision system's AABBs, refreshed by the phase itself).
+Reports the median over ``--steps`` steps (after a warm-up) of the step profile's
+``safety_fields`` phase, of the ``collision_check`` phase (the collision system's own broad and
+narrow phase on the same fleet, every step: a yardstick measured in the same run, so the ratio
+holds on a loaded machine), and of the whole step. ``--only on`` / ``--only off`` runs one
+configuration, for ``farm-bench`` to time whole processes side by side.
 
 Times are CPU-bound single-thread wall times of this process; the machine may be loaded, so
 quote the median of several runs (``farm-bench``) rather than one.
@@ -39,7 +41,7 @@ def build(robots: int, fields: bool) -> tuple[MultiRobotSimulationCore, list[Age
             target_rtf=0.0,
             timestep=0.1,
             enable_floor=False,
-            collision_check_frequency=0,
+            collision_check_frequency=None,
         )
     )
     per_row = 100
@@ -60,33 +62,39 @@ def build(robots: int, fields: bool) -> tuple[MultiRobotSimulationCore, list[Age
     return sim, agents
 
 
-def measure(robots: int, steps: int, fields: bool) -> tuple[float, float]:
-    """(mean safety_fields ms, mean step ms) per step."""
+def measure(robots: int, steps: int, fields: bool) -> tuple[float, float, float]:
+    """Median (safety_fields ms, collision_check ms, step ms) per step."""
     sim, _ = build(robots, fields)
     with sim:
         for _ in range(WARMUP):
             sim.step_once()
-        phase, total = [], []
+        phase, check, total = [], [], []
         for _ in range(steps):
             timings = sim.step_once(return_profiling=True)
             assert timings is not None
-            phase.append(timings.get("safety_fields", 0.0))
+            phase.append(timings["safety_fields"])
+            check.append(timings["collision_check"])
             total.append(timings["total"])
         stopped = len(sim.safety.stopped_agents())
         print(f"  fields={fields}: {stopped} robots stopped at the end")
-    return statistics.median(phase), statistics.median(total)
+    return statistics.median(phase), statistics.median(check), statistics.median(total)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robots", type=int, default=10_000)
     parser.add_argument("--steps", type=int, default=50)
+    parser.add_argument("--only", choices=("on", "off"), default=None)
     args = parser.parse_args()
-    on_phase, on_total = measure(args.robots, args.steps, True)
-    off_phase, off_total = measure(args.robots, args.steps, False)
     print(f"{args.robots} robots, median over {args.steps} steps (ms per step):")
-    print(f"  fields on : safety_fields {on_phase:.3f}, step {on_total:.3f}")
-    print(f"  fields off: safety_fields {off_phase:.3f}, step {off_total:.3f}")
+    for fields in (True, False):
+        if args.only is not None and fields != (args.only == "on"):
+            continue
+        phase, check, total = measure(args.robots, args.steps, fields)
+        print(
+            f"  fields {'on ' if fields else 'off'}: safety_fields {phase:.3f}, "
+            f"collision_check {check:.3f}, step {total:.3f}"
+        )
 
 
 if __name__ == "__main__":

@@ -272,13 +272,17 @@ class SafetyFields:
         keep &= (box_hi[obstacle, 2] >= z_lo[zi]) & (box_lo[obstacle, 2] <= z_hi[zi])
         keep &= table.not_carried(owner, obstacle_row, self._sim.world)
         owner, obstacle, obstacle_row = owner[keep], obstacle[keep], obstacle_row[keep]
+        # The protective field lies inside the warning field: test it only where that hit.
         u, w, half_w = shapes.u[owner], shapes.w[owner], shapes.half_w[owner]
         b_lo, b_hi = box_lo[obstacle, :2], box_hi[obstacle, :2]
-        c_warn, h_warn = shapes.rect(table.warning_depth)
-        c_prot, h_prot = shapes.rect(table.protective_depth)
-        warn = rect_hits_box(c_warn[owner], u, w, h_warn[owner], half_w, b_lo, b_hi)
-        prot = rect_hits_box(c_prot[owner], u, w, h_prot[owner], half_w, b_lo, b_hi)
-        return owner, obstacle_row, prot, warn
+        c_warn, h_warn = shapes.rect(table.warning_depth, owner)
+        warn = rect_hits_box(c_warn, u, w, h_warn, half_w, b_lo, b_hi)
+        owner, obstacle_row = owner[warn], obstacle_row[warn]
+        c_prot, h_prot = shapes.rect(table.protective_depth, owner)
+        prot = rect_hits_box(
+            c_prot, u[warn], w[warn], h_prot, half_w[warn], b_lo[warn], b_hi[warn]
+        )
+        return owner, obstacle_row, prot, np.ones(len(owner), dtype=bool)
 
     def _objects(self, rows: list[int]) -> list[Any]:
         world = self._sim.world

@@ -54,10 +54,16 @@ class FieldShapes:
         self.ext_u = half_length * cos + half_width * sin
         self.half_w = half_length * sin + half_width * cos + side
 
-    def rect(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(centres (M, 2), half depths (M,)) of the fields of ``depth`` (M,) metres."""
-        half = 0.5 * depth
-        return self.centre + self.u * (self.ext_u + half)[:, None], half
+    def rect(
+        self, depth: np.ndarray, which: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(centres (K, 2), half depths (K,)) of the fields of ``depth`` (M,) metres, of the
+        robots ``which`` (indices, repeats allowed; default all M)."""
+        if which is None:
+            half = 0.5 * depth
+            return self.centre + self.u * (self.ext_u + half)[:, None], half
+        half = 0.5 * depth[which]
+        return self.centre[which] + self.u[which] * (self.ext_u[which] + half)[:, None], half
 
     def bounds(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(min (M, 2), max (M, 2)) world-frame bounds of the fields of ``depth`` metres."""
@@ -93,13 +99,13 @@ def rect_hits_box(
         half_u, half_w: (K,) half extents along ``u`` and ``w``.
         box_lo, box_hi: (K, 2) the boxes' corners.
     """
-    half_box = 0.5 * (box_hi - box_lo)
-    d = centre - 0.5 * (box_hi + box_lo)
-    au, aw = np.abs(u), np.abs(w)
-    reach = au * half_u[:, None] + aw * half_w[:, None]
-    ok = np.all(np.abs(d) <= reach + half_box, axis=1)
-    du = np.abs(np.einsum("ij,ij->i", d, u))
-    ok &= du <= half_u + np.einsum("ij,ij->i", half_box, au)
-    dw = np.abs(np.einsum("ij,ij->i", d, w))
-    ok &= dw <= half_w + np.einsum("ij,ij->i", half_box, aw)
+    hx, hy = 0.5 * (box_hi[:, 0] - box_lo[:, 0]), 0.5 * (box_hi[:, 1] - box_lo[:, 1])
+    dx = centre[:, 0] - 0.5 * (box_hi[:, 0] + box_lo[:, 0])
+    dy = centre[:, 1] - 0.5 * (box_hi[:, 1] + box_lo[:, 1])
+    ux, uy, wx, wy = u[:, 0], u[:, 1], w[:, 0], w[:, 1]
+    aux, auy, awx, awy = np.abs(ux), np.abs(uy), np.abs(wx), np.abs(wy)
+    ok = np.abs(dx) <= aux * half_u + awx * half_w + hx
+    ok &= np.abs(dy) <= auy * half_u + awy * half_w + hy
+    ok &= np.abs(dx * ux + dy * uy) <= half_u + hx * aux + hy * auy
+    ok &= np.abs(dx * wx + dy * wy) <= half_w + hx * awx + hy * awy
     return ok
