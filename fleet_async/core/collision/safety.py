@@ -279,9 +279,7 @@ class SafetyFields:
         warn = rect_hits_box(c_warn, u, w, h_warn, half_w, b_lo, b_hi)
         owner, obstacle_row = owner[warn], obstacle_row[warn]
         c_prot, h_prot = shapes.rect(table.protective_depth, owner)
-        prot = rect_hits_box(
-            c_prot, u[warn], w[warn], h_prot, half_w[warn], b_lo[warn], b_hi[warn]
-        )
+        prot = rect_hits_box(c_prot, u[warn], w[warn], h_prot, half_w[warn], b_lo[warn], b_hi[warn])
         return owner, obstacle_row, prot, np.ones(len(owner), dtype=bool)
 
     def _objects(self, rows: list[int]) -> list[Any]:

@@ -323,8 +323,8 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
                 ``agent_update``, ``callbacks``, ``step_simulation``, ``collision_check``,
                 ``collision_breakdown`` when the collision check ran, ``events_pre_step``,
                 ``events_post_step``, ``events_collision``, ``monitor_update``, ``total``),
-                fleet_async's ``attachments``, and fields added by ``record_profiling``
-                (see ``sim/profiling.py``).
+                fleet_async's ``attachments`` and ``safety_fields``, and fields added by
+                ``record_profiling`` (see ``sim/profiling.py``).
 
         Returns:
             The timings when ``return_profiling`` is set, else None.

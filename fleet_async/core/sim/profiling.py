@@ -15,7 +15,7 @@ onto fleet_async's phases:
 - ``monitor_update``: always 0 here, since the monitor is updated by ``run_simulation``
   around the step, not inside it;
 - ``agent_update``, ``callbacks``, ``collision_check``, ``events_pre_step``,
-  ``events_post_step``, ``total``; and fleet_async's own ``attachments``.
+  ``events_post_step``, ``total``; and fleet_async's own ``attachments`` and ``safety_fields``.
 
 Fields recorded with ``record_profiling`` are added, summed within the step.
 """
