@@ -8,7 +8,7 @@ every 12 cells (the same dimensions as the warehouse maps of the MovingAI set). 
 0.4 m, cells of 1 m) start on free cells and each drives to another free cell in its aisle.
 
 Reports the wall time to load the map and spawn the robots, and the median step time (with the
-``safety_fields`` phase's share) over ``--steps`` steps.
+``safety_fields`` and ``collision_check`` phases' shares) over ``--steps`` steps.
 
 Run:  python benchmarks/map_bench.py [--robots 1000] [--steps 50]
 """
@@ -85,12 +85,13 @@ def main() -> None:
         with sim:
             for _ in range(5):
                 sim.step_once()
-            steps, phase = [], []
+            steps, phase, check = [], [], []
             for _ in range(args.steps):
                 timings = sim.step_once(return_profiling=True)
                 assert timings is not None
                 steps.append(timings["total"])
                 phase.append(timings["safety_fields"])
+                check.append(timings["collision_check"])
             stopped = len(sim.safety.stopped_agents())
     print(
         f"{WIDTH} x {HEIGHT} map: {len(loaded.lo)} obstacle boxes in {len(loaded.bodies)} bodies, "
@@ -98,7 +99,8 @@ def main() -> None:
     )
     print(
         f"step (median of {args.steps}): {statistics.median(steps):.2f} ms, of which "
-        f"safety_fields {statistics.median(phase):.2f} ms; {stopped} robots stopped at the end"
+        f"safety_fields {statistics.median(phase):.2f} ms, collision_check "
+        f"{statistics.median(check):.2f} ms; {stopped} robots stopped at the end"
     )
 
 
