@@ -83,6 +83,10 @@ class FleetMotion:
         """Store rows of the agents following a path on a built-in controller (an array)."""
         return self.engine.path_rows()
 
+    def segment_directions(self) -> Any:
+        """(store rows, unit xy directions) of the agents driving a path segment now."""
+        return self.engine.segment_directions()
+
     def remove_slot(self, slot: int) -> None:
         """Release an engine slot."""
         self._slot_agent.pop(slot, None)

@@ -51,6 +51,8 @@ class FieldMotion(Protocol):
 
     def path_rows(self) -> np.ndarray: ...
 
+    def segment_directions(self) -> tuple[np.ndarray, np.ndarray]: ...
+
     def set_time_scale(self, scale_of_row: Any) -> None: ...
 
 
@@ -210,7 +212,10 @@ class SafetyFields:
         table.sync(self._collision)
         on_path = np.zeros(store.capacity, dtype=bool)
         on_path[self._motion.path_rows()] = True
-        shapes, active = table.shapes(on_path)
+        seg_rows, seg_dirs = self._motion.segment_directions()
+        heading = np.zeros((store.capacity, 2))
+        heading[seg_rows] = seg_dirs
+        shapes, active = table.shapes(on_path, heading)
         hits = self._hits(shapes, active) if np.count_nonzero(active) else None
         scale = table.settle(
             active, hits, self._sim.step_count, self._emit, self._sim.params.timestep, self._objects

@@ -200,15 +200,27 @@ class FieldTable:
         z = self._store.position[self.rows[owners], 2]
         return z + self.z_off[owners, 0] + _CLEARANCE, z + self.z_off[owners, 1]
 
-    def shapes(self, on_path: np.ndarray) -> tuple[FieldShapes, np.ndarray]:
-        """This step's field shapes and which entries have a field in force."""
+    def shapes(self, on_path: np.ndarray, segment: np.ndarray) -> tuple[FieldShapes, np.ndarray]:
+        """This step's field shapes and which entries have a field in force.
+
+        Args:
+            on_path: (capacity,) whether each store row follows a path.
+            segment: (capacity, 2) unit direction of each row's current path segment, zero
+                where it has none (standing, turning in place).
+        """
         store, rows, held = self._store, self.rows, self.held
         vel = store.velocity[rows, :2]
         speed = np.hypot(vel[:, 0], vel[:, 1])
         moving = speed > _MOVING
-        active = on_path[rows] & (moving | held)
-        travel = np.where(held[:, None], self.held_dir, vel / np.where(moving, speed, 1.0)[:, None])
-        travel[~(moving | held)] = (1.0, 0.0)
+        # Where a robot drives: along its velocity; standing (stopped, or about to start a
+        # segment), along the segment it is to drive (a new path turns a stopped robot's
+        # fields with it); else the way it was going when it stopped.
+        seg = segment[rows]
+        has_seg = np.any(seg != 0.0, axis=1)
+        active = on_path[rows] & (moving | held | has_seg)
+        standing = np.where(has_seg[:, None], seg, self.held_dir)
+        travel = np.where(moving[:, None], vel / np.where(moving, speed, 1.0)[:, None], standing)
+        travel[~(moving | held | has_seg)] = (1.0, 0.0)
         # The speed the robot's path is planned at (its actual speed undoes last step's scale;
         # a stopped robot resumes at the speed it stopped at), and the speed it drives at now,
         # which sizes the fields: a stopped robot's fields are their standstill depth.

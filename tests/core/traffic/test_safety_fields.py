@@ -260,3 +260,32 @@ def test_kpis_count_stops_time_stopped_and_deadlocks():
         for _ in range(10):
             sim.step_once()
         assert kpis.summary().safety_stopped_time_total_s == summary.safety_stopped_time_total_s
+
+
+def test_a_stopped_robot_sent_the_other_way_drives_off():
+    with make_sim() as sim:
+        a = robot(sim, 0.0, name="a")
+        b = robot(sim, 4.0, name="b", yaw=3.141592653589793)
+        a.set_path([Pose.from_xyz(4.0, 0.0, 0.2)])
+        b.set_path([Pose.from_xyz(0.0, 0.0, 0.2)])
+        for _ in range(60):
+            sim.step_once()
+        assert sim.safety.stopped_agents() == [a, b]
+        x = a.get_pose().x
+        a.set_path([Pose.from_xyz(-2.0, 0.0, 0.2)])  # traffic control backs a off
+        for _ in range(40):
+            sim.step_once()
+        assert a.get_pose().x == pytest.approx(-2.0) and x > -2.0
+        assert b.get_pose().x < 4.0 - 1.0  # b drove on once a had made room
+
+
+def test_a_robot_does_not_start_into_an_obstacle_within_its_margin():
+    with make_sim() as sim:
+        a = robot(sim, 0.0, name="a")
+        wall(sim, 0.65)  # 0.05 m ahead of the footprint: inside the 0.1 m margin
+        log = record(sim)
+        a.set_path([Pose.from_xyz(3.0, 0.0, 0.2)])
+        for _ in range(10):
+            sim.step_once()
+        assert a.get_pose().x == 0.0
+        assert log == [("start", 0, "a", ["wall"])]
