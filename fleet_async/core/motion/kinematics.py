@@ -214,19 +214,6 @@ class KinematicEngine(SlotTable):
             and (np.count_nonzero(self.vel[slot]) or np.count_nonzero(self.cmd[slot]))
         )
 
-    def path_rows(self) -> np.ndarray:
-        """Store rows of the slots following a path (POSE mode), ascending by slot."""
-        return self._moving_slots()[1]
-
-    def segment_directions(self) -> tuple[np.ndarray, np.ndarray]:
-        """(store rows, (K, 2) unit ground-plane directions) of the path-following slots whose
-        current segment moves them (turns in place have none)."""
-        pose, rows, _, _ = self._moving_slots()
-        d = self.dp[pose, :2]
-        norm = np.hypot(d[:, 0], d[:, 1])
-        keep = norm > EPS_LEN
-        return rows[keep], d[keep] / norm[keep, None]
-
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""
         plan = self._plans[slot]

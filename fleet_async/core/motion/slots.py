@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fleet_async.core.motion.segments import EPS_LEN as _EPS_LEN
 from fleet_async.core.motion.segments import PROFILE_TERMS, profile_terms
 
 __all__ = [
@@ -177,6 +178,19 @@ class SlotTable:
             rows = self.row[pose]
             self._moving = (pose, rows, flat_rows(rows), (mode == VELOCITY).nonzero()[0])
         return self._moving
+
+    def path_rows(self) -> np.ndarray:
+        """Store rows of the slots following a path (POSE mode), ascending by slot."""
+        return self._moving_slots()[1]
+
+    def segment_directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """(store rows, (K, 2) unit ground-plane directions) of the path-following slots whose
+        current segment moves them (turns in place have none)."""
+        pose, rows, _, _ = self._moving_slots()
+        d = self.dp[pose, :2]
+        norm = np.hypot(d[:, 0], d[:, 1])
+        keep = norm > _EPS_LEN
+        return rows[keep], d[keep] / norm[keep, None]
 
     def _derive(self, slot: int) -> None:
         """Work out a slot's derived columns (``_DERIVED``) from its segment's columns."""
