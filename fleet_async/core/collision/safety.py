@@ -2,18 +2,20 @@
 
 Runs once per step as the ``safety_fields`` phase, just before the motion phase, on the poses
 the previous step left. For every agent with fields (``SafetyFieldParams``) that follows a path
-and is travelling (or is stopped by its field), the fields are laid ahead of its footprint
-along its direction of travel (``safety_geometry.py``); their bounds enter the collision
-broad phase (``broadphase.candidate_pairs``, the fields' robots marked moved) together with
-every object's AABB and the static obstacle boxes of maps, and the candidate pairs are tested
-exactly (a rectangle against a box). Then, per robot:
+and drives or is about to drive a segment (or is stopped by its field), the fields are laid
+ahead of its footprint along its direction of travel (its velocity; standing, the segment it
+is to drive) and sized by the speed it drives at (``safety_geometry.py``). One box per object
+enters the collision broad phase (``broadphase.candidate_pairs``): each fielded robot's AABB
+grown over its warning field (marked moved), every other object's AABB, a map's obstacle
+boxes; the candidate pairs are then tested exactly (a rectangle against a box). Per robot:
 
-- something in the protective field: the robot does not move in this step (its path and
-  profile wait, its action stays active), ``safety_stop_started`` is emitted when it begins;
-  while stopped, the field keeps the speed and direction the robot had when it stopped, so
-  that it resumes as it was (no stop-and-go on the field's own length);
+- something in the protective field: the robot does not move in this step (the engine's time
+  scale is 0 for it: its path and profile wait, its action stays active);
+  ``safety_stop_started`` is emitted when it begins. A stopped robot's fields have their
+  standstill depth, so it creeps up to an obstacle further away than its margin;
 - the field clears (or the robot's path ends or is cancelled): ``safety_stop_ended``, and the
-  robot drives on from where it stopped;
+  robot drives on from where it stopped, its time scale ramping up so that it speeds up at its
+  field's ``deceleration``;
 - something in the warning field only: the robot drives at ``slow_factor`` of its speed.
 
 What is not an obstacle: the robot itself, what it carries (its attachments), anything
