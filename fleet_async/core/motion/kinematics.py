@@ -95,7 +95,6 @@ class KinematicEngine(SlotTable):
         self._free: list[int] = []
         self._stopped: list[int] = []  # slots that arrived last step: zero their velocity next
         self._plans: list[_Plan | None] = []
-        self._scale: np.ndarray | None = None  # per slot: time scale of this step (fields)
         super().__init__()
         self._alloc(16)
 
@@ -103,7 +102,6 @@ class KinematicEngine(SlotTable):
 
     def _alloc(self, cap: int) -> None:
         super()._alloc(cap)
-        self._scale = None
         self._plans.extend([None] * (cap - len(self._plans)))
 
     def add(self, row: int, kind: int, limits: MotionLimits) -> int:
@@ -140,24 +138,6 @@ class KinematicEngine(SlotTable):
         self.alpha[slot] = limits.max_angular_accel
         self.lin_scalar[slot] = isinstance(limits.max_linear_vel, float)
         self.ang_scalar[slot] = isinstance(limits.max_angular_vel, float)
-
-    def set_time_scale(self, scale_of_row: np.ndarray | None) -> None:
-        """Scale the next step's progress along each slot's path by its store row's entry.
-
-        0 holds a slot where it is (its path and profile wait, to resume from where they
-        stopped), 0.5 drives it at half its speed; None (the default) drives every slot as
-        planned. Set before each step by the safety fields (``collision/safety.py``);
-        velocity commands are not scaled.
-
-        Args:
-            scale_of_row: (rows,) floats indexed by store row, covering every slot's row.
-        """
-        if scale_of_row is None:
-            self._scale = None
-            return
-        rows = self.row  # every slot's, so a slot added during the step has an entry
-        known = (rows >= 0) & (rows < len(scale_of_row))
-        self._scale = np.where(known, scale_of_row[np.where(known, rows, 0)], 1.0)
 
     # ----- checkpoints ----------------------------------------------------------------------
 
