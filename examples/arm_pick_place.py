@@ -4,9 +4,9 @@ Run:  python examples/arm_pick_place.py [--max-steps N] [--gui]
 
 A Franka Panda (from pybullet_data) and the project's 4-joint arm_robot each stand between two
 tables. Each arm picks three boxes off its left table and places them on its right table: the
-pick and drop actions reach with inverse kinematics (``ee_target_position``), attach the box to
-the end-effector link, and lift the arm back. The script prints every action as it ends, in sim
-time, and checks where the boxes ended up.
+pick and drop actions reach with inverse kinematics (``ee_target_position``) and attach the box
+to the end-effector link (or set it down); the arm stays where each reach took it until the next
+one. The script prints every action as it ends, in sim time, and checks where the boxes ended up.
 """
 
 from __future__ import annotations

@@ -29,8 +29,10 @@ from fleet_async import (
 
 def build(sim):
     """Spawn a shelf, four pallets and four differential robots; return robots and pallets."""
-    shelf = SimObject.from_sdf("kiva_shelf/model.sdf", sim_core=sim, collision_mode="static")[0]
+    # Place the shelf first, then make it static: a STATIC body never moves afterwards.
+    shelf = SimObject.from_sdf("kiva_shelf/model.sdf", sim_core=sim)[0]
     shelf.set_pose(Pose.from_xyz(0.0, 6.0, 0.0))
+    shelf.set_collision_mode("static")
     pallet_shape = ShapeParams("box", half_extents=[0.2, 0.2, 0.05], rgba_color=[0.8, 0.6, 0.3, 1])
     robot_shape = ShapeParams("box", half_extents=[0.3, 0.25, 0.1], rgba_color=[0.2, 0.4, 0.9, 1])
     robots, pallets = [], []

@@ -4,9 +4,9 @@ Run:  python examples/mobile_manipulator.py [--max-steps N] [--gui]
 
 The project's mobile_manipulator (a differential base with a lifting rail and a 4-joint arm)
 drives up to the pick table, stopping ``pick_offset`` short of the box, reaches for it with IK
-(wheels are locked out of the solve automatically), attaches it to its end effector, lifts the
-arm back and reverses out; then it drives to the station table and places the box the same
-way. The script is written as an async mission: ``await robot.pick(...)`` queues a PickAction
+(wheels are locked out of the solve automatically), attaches it to its end effector and
+reverses out, the arm still where the reach left it; then it drives to the station table and
+places the box the same way. The script is written as an async mission: ``await robot.pick(...)`` queues a PickAction
 and resumes, in sim time, when it ends.
 """
 

@@ -7,7 +7,7 @@ Run:  python examples/two_floor_building.py [--deliveries 1] [--backend asyncio|
 With --trace, `fleet-async view out.fatrace` replays the run in the browser: set the z range
 to 2-5 m to see the upper floor.
 
-The building is the scenario file examples/scenarios/two_floor_building.yaml: a dispenser on
+The building is the scenario file examples/scenarios/two_floor_world.yaml: a dispenser on
 the ground floor, a lift, and upstairs a wall with a sliding door in front of an ingestor.
 Four couriers share them. Two are driven by a behaviour tree (examples/trees/deliver.xml,
 BehaviorTree.CPP v4 XML), two by missions written as async code; both do the same round:
@@ -41,7 +41,7 @@ from fleet_async.behavior import BehaviorTreeFactory
 T = TypeVar("T")
 
 HERE = Path(__file__).resolve().parent
-SCENARIO = HERE / "scenarios" / "two_floor_building.yaml"
+SCENARIO = HERE / "scenarios" / "two_floor_world.yaml"
 TREE = HERE / "trees" / "deliver.xml"
 LANES = (-1.5, -0.5, 0.5, 1.5)  # each courier's y lane
 SLOTS = ((0.75, 0.0), (0.0, 0.75), (-0.75, 0.0), (0.0, -0.75))  # around the dispenser

@@ -44,11 +44,16 @@ STATIONS = (5.0, 15.0)  # x of the station tables (at y = 17)
 
 @dataclass
 class Order:
-    """Bring ``tote`` to station ``station``."""
+    """Bring ``tote`` to station ``station`` (an index into STATIONS), the body ``station_body``."""
 
     number: int
     tote: SimObject
     station: int
+    station_body: SimObject
+
+    def __str__(self) -> str:
+        # What the log, the KPIs' task events and the viewer's timeline call this order.
+        return f"order {self.number}: {self.tote.name} to {self.station_body.name}"
 
 
 def build(gui: bool) -> MultiRobotSimulationCore:
@@ -63,14 +68,18 @@ def build(gui: bool) -> MultiRobotSimulationCore:
 def prepare(
     sim: MultiRobotSimulationCore, robots: int, orders: int
 ) -> tuple[list[Agent], list[Order]]:
-    """Name the first ``robots`` pickers and ``orders`` totes; make the order list."""
+    """The first ``robots`` pickers, and an order list for the first ``orders`` totes.
+
+    Bodies keep the names the scenario gives them (picker_0, tote_A1_0, station_1, ...), so
+    the log below, the run summary, the trace and the viewer all say the same thing.
+    """
     fleet = sim.get_manager("pickers").objects[:robots]
-    for i, robot in enumerate(fleet):
-        robot.name = f"picker{i}"
     totes = [o for o in sim.sim_objects if (o.name or "").startswith("tote_")][:orders]
-    for k, tote in enumerate(totes):
-        tote.name = f"tote{k}"
-    return fleet, [Order(k, tote, k % len(STATIONS)) for k, tote in enumerate(totes)]
+    tables = [o for o in sim.sim_objects if (o.name or "").startswith("station_")]
+    bodies = [min(tables, key=lambda o, x=x: abs(o.get_pose().x - x)) for x in STATIONS]
+    return fleet, [
+        Order(k, tote, k % len(STATIONS), bodies[k % len(STATIONS)]) for k, tote in enumerate(totes)
+    ]
 
 
 def station_pose(station: int, slot: int) -> Pose:
@@ -112,7 +121,7 @@ async def run_shift(
                     pick_offset=0.4,
                     attach_relative_pose=Pose.from_xyz(0, 0, 0.2),
                 )
-                say(f"{robot.name} picked {order.tote.name} (order {order.number})")
+                say(f"{robot.name} picked {order.tote.name} ({order})")
                 await robot.move(via_cross_aisle(robot, STATION_LANE, STATIONS[order.station]))
                 slot = filled[order.station]
                 filled[order.station] += 1
@@ -121,11 +130,11 @@ async def run_shift(
                 # An order is a task: the fleet KPIs (sim.kpis(), fleet-async run / sweep)
                 # count these events as tasks completed / failed.
                 sim.events.emit(SimEvents.TASK_COMPLETED, sim=sim, agent=robot, task=order)
-                say(f"{robot.name} delivered order {order.number} to station {order.station}")
+                say(f"{robot.name} delivered {order}")
             except ActionFailedError as exc:
                 tally["failed"] += 1
                 sim.events.emit(SimEvents.TASK_FAILED, sim=sim, agent=robot, task=order)
-                say(f"{robot.name} gave up on order {order.number}: {exc.action.error_message}")
+                say(f"{robot.name} gave up on {order}: {exc.action.error_message}")
         await robot.move([*via_cross_aisle(robot, PICK_LANE), home])
         say(f"{robot.name} is back at the dock")
 

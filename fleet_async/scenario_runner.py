@@ -136,7 +136,7 @@ def run_scenario(
         await sim.sleep_until(sim.sim_time + 2 * limit)  # past the end: `until` stops the run
 
     start = sim.sim_time
-    run(sim, scenario, until=start + limit, backend=backend, watchdog=watchdog)
+    run(sim, scenario, until=start + limit, then="cancel", backend=backend, watchdog=watchdog)
     if finished:
         stopped = "done"
     elif duration is not None:

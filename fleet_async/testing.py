@@ -82,7 +82,7 @@ def run_mission_test(test: Any, kwargs: dict[str, Any], backend: str, until: flo
         finished.append(True)
         return result
 
-    result = run(sim, main, backend=backend, until=until)
+    result = run(sim, main, backend=backend, until=until, then="cancel")
     if not finished:
         raise AssertionError(f"the test mission had not finished at sim time {until} s")
     return result

@@ -231,6 +231,27 @@ def test_run_quiet_prints_nothing(script, scenario):
     assert result.stdout == ""
 
 
+def test_run_quiet_silences_the_missions_too(script):
+    # The warehouse's missions print a mission log; --quiet prints nothing at all.
+    warehouse = REPO / "examples" / "scenarios" / "warehouse.yaml"
+    result = cli(script, "run", warehouse, "--duration", "10", "--quiet")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+
+
+def test_view_runs_live_at_real_time_unless_told(tmp_path):
+    from fleet_async.cli.run import load_scenario
+
+    path = tmp_path / "s.yaml"
+    path.write_text("simulation: {gui: false}\nentities: []\n")
+    for rtf, expected in ((None, 1.0), (0.0, 0.0), (5.0, 5.0)):
+        with load_scenario(path, gui_on=False, rtf=rtf, live=True) as sim:
+            assert sim.params.target_rtf == expected
+    path.write_text("simulation: {gui: false, target_rtf: 3}\nentities: []\n")
+    with load_scenario(path, gui_on=False, rtf=None, live=True) as sim:
+        assert sim.params.target_rtf == 3.0
+
+
 def test_run_records_a_gif(script, scenario, tmp_path):
     out = tmp_path / "clips" / "run.gif"
     result = cli(
@@ -286,12 +307,12 @@ def test_run_record_without_pillow_explains_what_to_install(script, scenario, tm
         "1",
         "--record",
         tmp_path / "out.gif",
-        env={"PYTHONPATH": str(shadow.parent)},
+        env={"PYTHONPATH": os.pathsep.join([str(shadow.parent), os.environ.get("PYTHONPATH", "")])},
     )
     assert result.returncode == 2
     line = error_line(result.stderr)
     assert "needs Pillow" in line
-    assert 'pip install "fleet-async[record]"' in line
+    assert 'python -m pip install Pillow "imageio[pyav]"' in line
     assert not (tmp_path / "out.gif").exists()
 
 
@@ -705,15 +726,32 @@ def test_run_trace_writes_a_trace_the_viewer_reads(script, scenario, tmp_path):
     assert sorted(b["name"] for b in reader.bodies.values()) == ["box", "r0", "r1"]
 
 
-def test_view_rejects_a_cut_trace_naming_file_problem_and_version(script, scenario, tmp_path):
+def test_view_shows_a_cut_trace_with_a_warning_and_rejects_a_bad_one(script, scenario, tmp_path):
     out = tmp_path / "t.fatrace"
     assert cli(script, "run", scenario, "--duration", "1", "--trace", out).returncode == 0
     cut = tmp_path / "cut.fatrace"
     cut.write_bytes(out.read_bytes()[:-20])
+    viewer = subprocess.Popen(
+        [script, "view", str(cut), "--no-browser", "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        warning = viewer.stderr.readline()  # type: ignore[union-attr]
+        assert warning.startswith(f"fleet-async: warning: {cut}: truncated: record")
+        assert "the viewer shows the readable prefix" in warning
+        assert "fleet_async viewer:" in viewer.stdout.readline()  # type: ignore[union-attr]
+    finally:
+        viewer.send_signal(signal.SIGINT)
+        viewer.wait(timeout=30)
+    bad = bytearray(out.read_bytes())
+    bad[24:28] = b"\xff\xff\xff\xff"  # the META record's payload is no longer JSON
+    cut.write_bytes(bytes(bad))
     result = cli(script, "view", cut, "--no-browser")
     assert result.returncode == 2
     line = error_line(result.stderr)
-    assert str(cut) in line and "truncated" in line and "versions 1 and 2" in line
+    assert str(cut) in line and "record 0 (META) at byte 16" in line and "versions 1 and 2" in line
     result = cli(script, "view", tmp_path / "missing.fatrace", "--no-browser")
     assert result.returncode == 2 and "no such trace file" in error_line(result.stderr)
 
@@ -738,3 +776,28 @@ def test_view_serves_the_page_and_the_trace(script, scenario, tmp_path):
         finally:
             proc.send_signal(signal.SIGINT)
             assert proc.wait(timeout=30) == 0
+
+
+def test_per_robot_rows_show_shared_names_with_their_ids():
+    from fleet_async.cli.run import _shared_names_with_ids
+
+    rows = [{"robot": "twin", "object_id": 3}, {"robot": "twin", "object_id": 4}]
+    rows.append({"robot": "solo", "object_id": 5})
+    assert [r["robot"] for r in _shared_names_with_ids(rows)] == ["twin#3", "twin#4", "solo"]
+
+
+def test_recording_progress_lines_where_stderr_is_not_a_terminal(scenario, tmp_path, capsys):
+    from fleet_async.cli.run import _report_recording
+
+    sim = load_scenario(scenario, gui_on=False, rtf=0.0)
+    try:
+        recorder = sim.start_recording(tmp_path / "r.gif", width=64, height=48, renderer="topdown")
+        _report_recording(sim, recorder, every=0.0)
+        for _ in range(3):
+            sim.step_once()
+        sim.stop_recording()
+    finally:
+        sim.close()
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == f"recording {tmp_path / 'r.gif'}: 2 frames, 0.1 s of sim time"
+    assert len(lines) == 3

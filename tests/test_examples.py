@@ -27,3 +27,22 @@ def test_example_runs_headless(example):
     )
     assert result.returncode == 0, result.stdout + result.stderr
     assert result.stdout.strip(), "an example must print what the fleet did"
+    # A shipped example teaches by example: it must not trip the library's warnings, which
+    # go to stderr (PyBullet's build banner is the only line expected there).
+    noise = [
+        line
+        for line in result.stderr.splitlines()
+        if line.strip() and not line.startswith("pybullet build time")
+    ]
+    assert not noise, f"{example.name} warned:\n" + "\n".join(noise)
+
+
+def test_example_names_are_unique_and_descriptions_whole():
+    from fleet_async.cli.examples import list_examples
+
+    examples = list_examples(EXAMPLES[0].parent)
+    names = [example.name for example in examples]
+    assert len(names) == len(set(names)), names
+    for example in examples:
+        # A whole sentence (or question), not a first line cut mid-sentence.
+        assert example.description.endswith((".", "?")), (example.name, example.description)

@@ -17,6 +17,7 @@ import difflib
 import runpy
 import shutil
 import sys
+import textwrap
 from pathlib import Path
 
 import fleet_async
@@ -75,36 +76,48 @@ def examples_dir() -> Path:
             return root
     raise CliError(
         f"no examples found: looked in {candidates[0]} (an installed fleet-async) and "
-        f"{candidates[1]} (a source checkout). Reinstall fleet-async (pip install "
-        "--force-reinstall fleet-async) or use a source checkout."
+        f"{candidates[1]} (a source checkout). Reinstall fleet-async from its "
+        "source checkout (python -m pip install -e .) or from a wheel built there."
     )
 
 
+def _first_paragraph(lines: list[str]) -> str:
+    """The first run of non-blank lines, joined with single spaces (a whole sentence even
+    when the author wrapped it)."""
+    paragraph: list[str] = []
+    for line in lines:
+        text = line.strip()
+        if text:
+            paragraph.append(text)
+        elif paragraph:
+            break
+    return " ".join(paragraph)
+
+
 def script_description(path: Path) -> str:
-    """The first line of a Python file's module docstring ("" without one)."""
+    """The first paragraph of a Python file's module docstring ("" without one)."""
     try:
         docstring = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8")))
     except (OSError, SyntaxError, UnicodeDecodeError) as exc:
         return f"(cannot read: {exc})"
-    return docstring.strip().splitlines()[0] if docstring and docstring.strip() else ""
+    return _first_paragraph(docstring.splitlines()) if docstring else ""
 
 
 def scenario_description(path: Path) -> str:
-    """The first comment line at the top of a YAML file ("" without one)."""
+    """The first paragraph of the comment block at the top of a YAML file ("" without one)."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         return f"(cannot read: {exc})"
+    comments: list[str] = []
     for line in lines:
         text = line.strip()
-        if not text:
-            continue
         if not text.startswith("#"):
-            return ""
-        comment = text.lstrip("#").strip()
-        if comment:
-            return comment
-    return ""
+            if text or comments:
+                break
+            continue
+        comments.append(text.lstrip("#"))
+    return _first_paragraph(comments)
 
 
 def list_examples(root: Path) -> list[Example]:
@@ -148,6 +161,7 @@ def find_example(root: Path, name: str) -> Example:
 def _print_list(root: Path) -> int:
     examples = list_examples(root)
     width = max((len(e.name) for e in examples), default=0) + 2
+    columns = shutil.get_terminal_size((100, 24)).columns
     groups = (
         ("script", "Python examples (fleet-async examples --run NAME [ARGS ...]):"),
         ("scenario", "Scenarios (fleet-async examples --run NAME [fleet-async run options]):"),
@@ -155,7 +169,11 @@ def _print_list(root: Path) -> int:
     for kind, title in groups:
         print(title)
         for example in (e for e in examples if e.kind == kind):
-            print(f"  {example.name:<{width}}{example.description}")
+            # Whole descriptions, wrapped under themselves rather than cut at the first line.
+            lines = textwrap.wrap(example.description, max(40, columns - width - 2)) or [""]
+            print(f"  {example.name:<{width}}{lines[0]}")
+            for line in lines[1:]:
+                print(f"  {'':<{width}}{line}")
     print(f"(from {root})")
     return 0
 

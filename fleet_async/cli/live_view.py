@@ -5,7 +5,7 @@ from __future__ import annotations
 import threading
 
 from fleet_async.cli.errors import CliError
-from fleet_async.cli.view import open_viewer
+from fleet_async.cli.view import open_viewer, warn
 from fleet_async.core import MultiRobotSimulationCore
 from fleet_async.viewer.server import ViewerServer
 
@@ -17,7 +17,7 @@ def start(sim: MultiRobotSimulationCore, port: int) -> tuple[ViewerServer, threa
     tracer = sim.tracer
     assert tracer is not None  # the run command starts the trace first
     try:
-        server = ViewerServer(tracer.path, port=port, follow=True)
+        server = ViewerServer(tracer.path, port=port, follow=True, notice=warn)
     except OSError as exc:
         raise CliError(
             f"--view: cannot listen on port {port} ({exc.strerror}); pick another with --view-port"

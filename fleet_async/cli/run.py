@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import io
 import math
 import sys
 import time
@@ -129,7 +130,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--record",
         metavar="OUT",
         help="record the run to OUT: .gif (needs Pillow) or .mp4 (needs imageio with PyAV); "
-        'install both with: pip install "fleet-async[record]"',
+        'install both with: python -m pip install Pillow "imageio[pyav]"',
     )
     parser.add_argument(
         "--record-size",
@@ -144,6 +145,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=15,
         metavar="N",
         help="frames per sim second of --record (default: 15; at most 50 for .gif)",
+    )
+    parser.add_argument(
+        "--record-renderer",
+        choices=("topdown", "pybullet"),
+        default="topdown",
+        help="how --record draws: topdown (the default: every body's footprint seen from "
+        "above, framed on the robots and what they work with; many times faster) or pybullet "
+        "(PyBullet's software renderer: perspective views, any --camera)",
     )
     parser.add_argument(
         "--backend",
@@ -191,7 +200,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--view",
         action="store_true",
         help="watch the run live in the browser viewer (traces to --trace, or to "
-        "SCENARIO.fatrace in the working directory); after the run the page stays served "
+        "SCENARIO.fatrace in the working directory), paced at the scenario's target_rtf or "
+        "real time (1.0) unless --rtf says otherwise; after the run the page stays served "
         "until Ctrl+C",
     )
     parser.add_argument(
@@ -204,7 +214,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quiet",
         action="store_true",
-        help="print nothing (no progress bar, no summary); errors still go to stderr",
+        help="print nothing (no progress bar, no summary, nothing the scenario's missions "
+        "print); errors still go to stderr",
     )
 
 
@@ -212,7 +223,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def load_scenario(
-    path: Path, gui_on: bool, rtf: float | None, *, drop_trace: bool = False
+    path: Path,
+    gui_on: bool,
+    rtf: float | None,
+    *,
+    drop_trace: bool = False,
+    live: bool = False,
 ) -> MultiRobotSimulationCore:
     """Build the simulation of the scenario file at ``path`` (as ``from_yaml`` does).
 
@@ -220,8 +236,11 @@ def load_scenario(
         path: The scenario YAML (flat or nested layout).
         gui_on: Value for ``gui``, replacing the scenario's.
         rtf: Value for ``target_rtf``; None keeps the scenario's with a GUI (0 if it sets
-            none) and runs headless runs as fast as possible.
+            none) or a live view (1.0, real time, if it sets none: a run as fast as possible
+            would end before a browser connects), and runs other headless runs as fast as
+            possible.
         drop_trace: Ignore the scenario's ``trace:`` section (the command line traces).
+        live: Someone watches the run as it happens (``--view``).
 
     Raises:
         FileNotFoundError, ValueError, TypeError: from the loader, naming the file and key.
@@ -244,6 +263,9 @@ def load_scenario(
         settings["gui"] = gui_on
         if rtf is not None:
             settings["target_rtf"] = rtf
+        elif live:
+            if not settings.get("target_rtf"):  # unset or 0 (as fast as possible)
+                settings["target_rtf"] = 1.0
         elif gui_on:
             settings.setdefault("target_rtf", 0.0)
         else:  # nobody is watching: pacing to the wall clock would only slow the run down
@@ -284,7 +306,9 @@ def execute(args: argparse.Namespace) -> int:
     """Run the ``run`` command; return the exit code."""
     path = Path(args.scenario)
     try:
-        sim = load_scenario(path, args.gui, args.rtf, drop_trace=bool(args.trace or args.view))
+        sim = load_scenario(
+            path, args.gui, args.rtf, drop_trace=bool(args.trace or args.view), live=args.view
+        )
     except (ValueError, TypeError, OSError) as exc:
         raise CliError(str(exc)) from exc
     try:
@@ -305,9 +329,38 @@ def _set_camera(sim: MultiRobotSimulationCore, mode: str) -> None:
 def _start_recording(sim: MultiRobotSimulationCore, args: argparse.Namespace) -> None:
     width, height = args.record_size
     try:
-        sim.start_recording(args.record, width=width, height=height, fps=args.record_fps)
+        renderer = args.record_renderer
+        if (
+            renderer == "topdown"
+            and args.camera
+            and args.camera not in ("auto", "top_down", "fleet")
+        ):
+            renderer = "pybullet"  # a perspective camera was asked for: PyBullet draws it
+        recorder = sim.start_recording(
+            args.record, width=width, height=height, fps=args.record_fps, renderer=renderer
+        )
     except (ImportError, ValueError) as exc:
         raise CliError(f"--record {args.record}: {exc}") from exc
+    if not args.quiet and not sys.stderr.isatty():  # a terminal has the progress bar
+        _report_recording(sim, recorder)
+
+
+def _report_recording(sim: MultiRobotSimulationCore, recorder: Any, every: float = 5.0) -> None:
+    """Where the bar cannot be drawn (a log, CI): a line on stderr every ``every`` wall s."""
+    state = {"next": time.perf_counter() + every}
+
+    def report(**_: Any) -> None:
+        now = time.perf_counter()
+        if now >= state["next"] and recorder.is_recording:
+            state["next"] = now + every
+            print(
+                f"recording {recorder.output}: {recorder.frame_count} frames, "
+                f"{sim.sim_time:.1f} s of sim time",
+                file=sys.stderr,
+                flush=True,
+            )
+
+    sim.events.on(SimEvents.POST_STEP, report, priority=101)  # after the recorder (100)
 
 
 def _start_trace(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namespace) -> None:
@@ -355,6 +408,18 @@ class StepWatcher:
         sim.update_monitor()
 
 
+def _shared_names_with_ids(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows whose robot name is shared (Python allows that) say ``name#object_id``, as the
+    trace viewer does."""
+    counts: dict[Any, int] = {}
+    for row in rows:
+        counts[row["robot"]] = counts.get(row["robot"], 0) + 1
+    return [
+        {**row, "robot": f"{row['robot']}#{row['object_id']}"} if counts[row["robot"]] > 1 else row
+        for row in rows
+    ]
+
+
 def _limit(sim: MultiRobotSimulationCore, requested: float | None) -> float | None:
     if requested is not None:
         return requested
@@ -391,6 +456,8 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     if bar is not None and bar.enabled:
         bar.start()
         sys.stdout, sys.stderr = bar.guard(sys.stdout), bar.guard(sys.stderr)
+    if args.quiet:  # what the missions print, too
+        sys.stdout = io.StringIO()
     try:
         with contextlib.suppress(KeyboardInterrupt):  # Ctrl+C: summarise what ran
             outcome = run_scenario(sim, limit, backend=args.backend)
@@ -399,6 +466,8 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
     wall = time.perf_counter() - wall0
     if bar is not None:
         bar.finish(sim.sim_time - start_time)
+    if args.record and not args.quiet:
+        print(f"saving {args.record} ...", file=sys.stderr, flush=True)
     saved = sim.stop_recording() if args.record else None
     trace = sim.stop_trace()
     if args.save_state:
@@ -414,7 +483,7 @@ def _run_loaded(sim: MultiRobotSimulationCore, path: Path, args: argparse.Namesp
             )
         )
         if args.per_robot:
-            robots = [r.as_dict() for r in kpis.per_robot()]
+            robots = _shared_names_with_ids([r.as_dict() for r in kpis.per_robot()])
             print(f"\nper robot:\n{format_table(robots, RobotKpis.columns())}")
     if live is not None:
         live_view.serve_until_interrupted(live, keep=outcome is not None)

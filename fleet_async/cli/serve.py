@@ -88,8 +88,14 @@ def _settings(sim: Any, path: Path, args: argparse.Namespace) -> Any:
     return settings
 
 
+class _Stopped(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM while serving. A subclass, because CPython remembers a plain
+    KeyboardInterrupt that ever crossed code it ran from a string (even once handled) and then
+    exits by SIGINT instead of with the command's own exit code."""
+
+
 def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
+    raise _Stopped
 
 
 def _messages(exc: BaseException) -> str:
@@ -141,6 +147,7 @@ def _serve(sim: Any, path: Path, args: argparse.Namespace) -> int:
 
     # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C: OFFLINE is published.
     previous = signal.signal(signal.SIGTERM, _interrupt)
+    previous_int = signal.signal(signal.SIGINT, _interrupt)
     try:
         transport = serve(
             sim,
@@ -158,6 +165,7 @@ def _serve(sim: Any, path: Path, args: argparse.Namespace) -> int:
         raise CliError(_messages(exc)) from exc  # missions failed: one line per error
     finally:
         signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
         if args.trace:
             sim.stop_trace()
     stats, sent = transport.stats, transport.sent_summary()

@@ -155,6 +155,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "seed, then run for --duration",
     )
     parser.add_argument(
+        "--unsafe",
+        action="store_true",
+        help="with --checkpoint: also read an old (format 1) checkpoint, a pickle, which runs "
+        "any code it names: only for a file whose maker you trust",
+    )
+    parser.add_argument(
         "--per-robot",
         metavar="FILE",
         help="also write the per-robot table (one row per robot per run) to FILE",
@@ -269,6 +275,7 @@ def execute(args: argparse.Namespace) -> int:
             duration=args.duration,
             robots_out=args.per_robot,
             checkpoint=args.checkpoint,
+            unsafe=args.unsafe,
             on_progress=on_progress,
         )
     except (SweepKeyError, ValueError, ImportError, RuntimeError) as exc:

@@ -59,10 +59,14 @@ class MultiRobotSimulationCore(
     def run_simulation(self, duration: float | None = None) -> None:
         """Step for ``duration`` sim seconds (``params.duration`` if None; <= 0 runs until Ctrl+C).
 
-        Paced at ``params.target_rtf`` times real time (0: as fast as possible).
+        Paced at ``params.target_rtf`` times real time (0: as fast as possible). A paused
+        simulation is resumed first (``RESUMED`` is emitted), as pybullet_fleet does: without a
+        GUI nothing could resume it, and the run would never end. Pausing during the run (SPACE
+        in the GUI, or ``pause()`` from another thread) holds the clock until ``resume()``.
         """
         if not self._initialized:
             self.initialize_simulation()
+        self.resume()
         run_for = self._params.duration if duration is None else duration
         self._frame_gui_camera()
         self.setup_monitor()

@@ -27,6 +27,7 @@ from fleet_async.sweep.engines import (
     make_engine,
 )
 from fleet_async.sweep.grid import SweepPlan, parse_assignment, parse_seeds, parse_value
+from fleet_async.sweep.lock import SweepLockedError
 from fleet_async.sweep.overrides import SweepKeyError, apply_overrides, settable_keys
 from fleet_async.sweep.runner import (
     SweepProgress,
@@ -57,6 +58,7 @@ __all__ = [
     "RunSpec",
     "Scenario",
     "SweepKeyError",
+    "SweepLockedError",
     "SweepPlan",
     "SweepProgress",
     "SweepSummary",

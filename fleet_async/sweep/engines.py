@@ -12,13 +12,13 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import os
-import signal
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from fleet_async.sweep.orphans import init_worker
 from fleet_async.sweep.scenarios import RunResult, RunSpec, describe_error, execute_run
 
 __all__ = ["ENGINES", "Engine", "InlineEngine", "PoolEngine", "RayEngine", "make_engine"]
@@ -78,7 +78,8 @@ class PoolEngine(Engine):
 
     Workers are started fresh (``spawn``), as Ray's are, so a run never inherits state from
     the process that started the sweep; they ignore Ctrl+C, which the sweep handles: no new run
-    starts, the ones in progress finish and are written.
+    starts, the ones in progress finish and are written. They exit when the sweep's process
+    dies, even by ``kill -9`` (``orphans.py``).
 
     Args:
         workers: Worker processes (default: one per CPU core).
@@ -99,8 +100,8 @@ class PoolEngine(Engine):
         return ProcessPoolExecutor(
             max_workers=workers,
             mp_context=multiprocessing.get_context("spawn"),
-            initializer=signal.signal,  # stdlib: runs before any fleet_async import
-            initargs=(signal.SIGINT, signal.SIG_IGN),
+            initializer=init_worker,  # ignore Ctrl+C; exit when this process dies
+            initargs=(os.getpid(),),
         )
 
     def map_unordered(self, specs: Sequence[RunSpec]) -> Iterator[RunResult]:
@@ -129,10 +130,17 @@ class PoolEngine(Engine):
                     queue.clear()
                     for future in [f for f in pending if f.cancel()]:
                         del pending[future]
+                    # At most `workers` runs are running; the pool hands one more to a
+                    # worker early, and that one cannot be cancelled any more.
+                    running = min(len(pending), workers)
                     logger.warning(
-                        "interrupted: finishing the %d runs already started (Ctrl+C again to "
-                        "stop at once)",
-                        len(pending),
+                        "interrupted: finishing the %d runs already started on %d workers%s "
+                        "(Ctrl+C again to stop at once)",
+                        running,
+                        workers,
+                        f" and {len(pending) - running} queued in the pool"
+                        if len(pending) > running
+                        else "",
                     )
                     continue
                 for future in sorted(done, key=lambda f: pending[f].index):

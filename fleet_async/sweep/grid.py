@@ -17,6 +17,8 @@ from typing import Any
 
 import yaml
 
+from fleet_async.core.base.yaml_scalars import load_yaml_text
+
 __all__ = ["SweepPlan", "parse_assignment", "parse_seeds", "parse_value"]
 
 _INT = re.compile(r"[+-]?\d+")
@@ -109,17 +111,18 @@ def parse_seeds(text: str) -> list[int]:
 
 
 def parse_value(text: str) -> Any:
-    """One value of ``--set``: a number, true/false/null, a YAML flow list or mapping
-    (``[0, 0, 0.1]``), or else the text itself."""
+    """One value of ``--set``, read by the same scalar rule as scenario files
+    (``fleet_async.core.base.yaml_scalars``): a number, true/false/null, a YAML flow list or
+    mapping (``[0, 0, 0.1]``), or else the text itself.
+
+    Raises:
+        ValueError: for a form the rule refuses (``no``, ``1:30``, ``0x1F``), naming it.
+    """
     text = text.strip()
-    if _INT.fullmatch(text):
-        return int(text)
     try:
-        return float(text)  # also 1e-3, which YAML 1.1 would leave a string
-    except ValueError:
-        pass
-    try:
-        value = yaml.safe_load(text)
+        value = load_yaml_text(text)
+    except yaml.constructor.ConstructorError as exc:
+        raise ValueError(f"--set value {text!r}: {exc.problem}") from exc
     except yaml.YAMLError:
         return text
     return text if value is None and text not in ("null", "~") else value

@@ -17,6 +17,7 @@ from typing import Any
 from fleet_async.core import FleetKpis, RobotKpis
 from fleet_async.sweep.engines import Engine, PoolEngine
 from fleet_async.sweep.grid import SweepPlan
+from fleet_async.sweep.lock import TableLock
 from fleet_async.sweep.overrides import SweepKeyError
 from fleet_async.sweep.scenarios import RunResult, RunSpec, Scenario
 from fleet_async.sweep.table import ResultTable
@@ -102,6 +103,7 @@ def run_sweep(
     duration: float | None = None,
     robots_out: str | Path | None = None,
     checkpoint: str | Path | None = None,
+    unsafe: bool = False,
     on_progress: Callable[[SweepProgress], None] | None = None,
 ) -> SweepSummary:
     """Run every (grid point, seed) of ``plan`` on ``scenario``; write the table to ``out``.
@@ -117,9 +119,11 @@ def run_sweep(
         duration: Sim seconds per run (default: the scenario's).
         robots_out: Also write the per-robot table here.
         checkpoint: Branch every run from this checkpoint (``sim.save_state``): each run
-            builds the scenario, restores it, reseeds the generator with its seed and runs
-            ``duration`` more sim seconds. Workers read the file: on a cluster, it must be at
-            the same path on every node.
+            builds the scenario, restores it, reseeds it with its seed (``sim.reseed``: the
+            simulation's generator and every stream of ``sim.rng_for``) and runs ``duration``
+            more sim seconds. Workers read the file: on a cluster, it must be at the same path
+            on every node.
+        unsafe: Also read a format-1 checkpoint (a pickle: reading it runs any code it names).
         on_progress: Called with a :class:`SweepProgress` once at the start and after each run.
 
     Returns:
@@ -129,24 +133,56 @@ def run_sweep(
     Raises:
         SweepKeyError: for a key the scenario does not have (naming the valid ones).
         ValueError: if ``out`` holds a table of another sweep.
+        SweepLockedError: while another sweep writes ``out`` (an OS lock on ``<out>.lock``,
+            dropped by the kernel when its holder exits, even by ``kill -9``).
         ImportError: for Parquet without pyarrow, or the Ray engine without Ray.
     """
     t0 = time.perf_counter()
     keys = plan.keys
     _check_keys(scenario, keys)
-    runs = plan.runs()
-    expected = {index: {"run": index, **point, "seed": seed} for index, point, seed in runs}
+    locks = [TableLock(path) for path in (out, robots_out) if path is not None]
+    try:
+        for lock in locks:
+            lock.acquire()
+        tables = _open_tables(plan, out, robots_out)
+        start = None if checkpoint is None else str(Path(checkpoint).resolve())
+        return _sweep(scenario, plan, tables, engine, duration, start, unsafe, on_progress, t0)
+    finally:
+        for lock in locks:
+            lock.release()
+
+
+def _open_tables(
+    plan: SweepPlan, out: str | Path, robots_out: str | Path | None
+) -> tuple[ResultTable, ResultTable | None]:
+    keys = plan.keys
+    expected = {index: {"run": index, **point, "seed": seed} for index, point, seed in plan.runs()}
     key_columns = ["run", *keys, "seed"]
     table = ResultTable(out, result_columns(keys), key_columns, expected)
-    done = table.runs
     robots_table = (
-        ResultTable(robots_out, robot_columns(keys), key_columns, expected, only_runs=done)
+        ResultTable(robots_out, robot_columns(keys), key_columns, expected, only_runs=table.runs)
         if robots_out is not None
         else None
     )
-    start = None if checkpoint is None else str(Path(checkpoint).resolve())
+    return table, robots_table
+
+
+def _sweep(
+    scenario: Scenario,
+    plan: SweepPlan,
+    tables: tuple[ResultTable, ResultTable | None],
+    engine: Engine | None,
+    duration: float | None,
+    start: str | None,
+    unsafe: bool,
+    on_progress: Callable[[SweepProgress], None] | None,
+    t0: float,
+) -> SweepSummary:
+    table, robots_table = tables
+    runs = plan.runs()
+    done = table.runs
     todo = [
-        RunSpec(index, point, seed, scenario, duration, robots_table is not None, start)
+        RunSpec(index, point, seed, scenario, duration, robots_table is not None, start, unsafe)
         for index, point, seed in runs
         if index not in done
     ]

@@ -22,8 +22,6 @@ from collections.abc import Awaitable, Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from fleet_async.core import MultiRobotSimulationCore, load_yaml_config
 from fleet_async.core.base.steps import steps_for
 from fleet_async.scenario_runner import DEFAULT_MAX_DURATION, run_scenario
@@ -33,6 +31,7 @@ from fleet_async.sweep.overrides import (
     is_nested,
     settable_keys,
 )
+from fleet_async.sweep.table import round_sim_times
 from fleet_async.tasks import run as run_missions
 
 if sys.version_info < (3, 11):  # anyio depends on the backport there
@@ -259,7 +258,9 @@ class RunSpec:
             ``missions:`` have returned and its actions are done (at most 600 s).
         per_robot: Also return the per-robot table.
         checkpoint: Branch from this checkpoint (``sim.save_state``): restore it into the
-            freshly built simulation and reseed its generator with ``seed`` before running.
+            freshly built simulation and reseed it with ``seed`` (``sim.reseed``: ``sim.rng``
+            and every stream of ``sim.rng_for``, controllers' among them) before running.
+        unsafe: Also read a format-1 (pickle) checkpoint, which runs code it names.
     """
 
     index: int
@@ -269,6 +270,7 @@ class RunSpec:
     duration: float | None = None
     per_robot: bool = False
     checkpoint: str | None = None
+    unsafe: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -345,8 +347,11 @@ def _run_built(
     else:
         _run_scenario(sim, spec.duration)
     kpis.stop()
-    robots = [r.as_dict() for r in kpis.per_robot()] if spec.per_robot else None
-    return kpis.summary().as_dict(), robots
+    dt = sim.params.timestep
+    robots = (
+        [round_sim_times(r.as_dict(), dt) for r in kpis.per_robot()] if spec.per_robot else None
+    )
+    return round_sim_times(kpis.summary().as_dict(), dt), robots
 
 
 def execute_run(spec: RunSpec) -> RunResult:
@@ -359,8 +364,8 @@ def execute_run(spec: RunSpec) -> RunResult:
         sim, main = spec.scenario.build(spec.params, spec.seed)
         try:
             if spec.checkpoint is not None:
-                sim.restore_state(spec.checkpoint)
-                sim.rng = np.random.default_rng(spec.seed)  # branches differ from here on
+                sim.restore_state(spec.checkpoint, unsafe=spec.unsafe)
+                sim.reseed(spec.seed)  # every stream: branches differ from here on
             kpis, robots = _run_built(sim, main, spec)
         finally:
             sim.close()

@@ -16,18 +16,57 @@ number) is refused rather than mixed with.
 from __future__ import annotations
 
 import csv
+import decimal
 import json
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["PARQUET_MISSING", "ResultTable", "cell_text", "read_table"]
+__all__ = [
+    "PARQUET_MISSING",
+    "SIM_TIME_COLUMNS",
+    "ResultTable",
+    "cell_text",
+    "read_table",
+    "round_sim_times",
+]
 
 PARQUET_MISSING = (
     "writing Parquet needs pyarrow, which is not installed: pip install pyarrow "
     "(or write CSV: --out results.csv)"
 )
+
+
+SIM_TIME_COLUMNS = frozenset(
+    {
+        "sim_time_s",
+        "moving_time_total_s",
+        "waiting_time_total_s",
+        "idle_time_total_s",
+        "moving_time_s",
+        "waiting_time_s",
+        "idle_time_s",
+    }
+)
+"""Columns that hold a whole number of steps times the timestep (sim seconds)."""
+
+
+def _decimals(timestep: float) -> int:
+    """Decimal places of ``timestep`` as written (0.1 -> 1, 0.025 -> 3; at most 12)."""
+    exponent = decimal.Decimal(repr(float(timestep))).normalize().as_tuple().exponent
+    return min(12, max(0, -exponent)) if isinstance(exponent, int) else 12
+
+
+def round_sim_times(row: Mapping[str, Any], timestep: float) -> dict[str, Any]:
+    """``row`` with its sim-time columns (:data:`SIM_TIME_COLUMNS`) rounded to the timestep's
+    decimal places: a count of steps times 0.1 s reads ``23.4``, not ``23.400000000000002``.
+    Means (``..._mean_s``) are left as computed."""
+    places = _decimals(timestep)
+    return {
+        key: round(value, places) if key in SIM_TIME_COLUMNS and isinstance(value, float) else value
+        for key, value in row.items()
+    }
 
 
 def cell_text(value: Any) -> str:

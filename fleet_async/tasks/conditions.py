@@ -51,16 +51,17 @@ class Condition(SimEvent):
                 event.callbacks.append(self._check)
         self.callbacks.append(self._build_value)  # type: ignore[union-attr]  # fresh event
 
-    def abandon(self, mission: Any) -> None:
+    def abandon(self, mission: Any, cancelled: bool = True) -> None:
         """Its waiting mission was cancelled or interrupted: if nobody else waits on the
         condition, stop watching its events and let each give up what its wait set up (a
-        request is withdrawn, an action cancelled), as if the mission had awaited it alone."""
+        cancellation withdraws a request, an interrupt leaves it queued; an action is
+        cancelled), as if the mission had awaited it alone."""
         if self.callbacks is None or len(self.callbacks) > 1:  # beyond _build_value
             return
         self.detach_checks()
         for event in self._events:
             if event.abandon is not None:
-                event.abandon(mission)
+                event.abandon(mission, cancelled)
 
     def _check(self, event: SimEvent) -> None:
         if self.raw_value is not PENDING:

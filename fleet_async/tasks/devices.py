@@ -167,7 +167,7 @@ async def pass_through(
         await door.open()
         moved = await robot.move(path)
         if close_after and not doorway.queue:
-            _CLOSING[door] = door.close()
+            _CLOSING[door] = door.close(detached=True)  # outlives this mission
         return moved
 
 

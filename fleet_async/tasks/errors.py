@@ -66,6 +66,9 @@ class ActionFailedError(MissionError):
         self.action = action
         super().__init__(f"{type(action).__name__} failed: {action.error_message}")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        return type(self), (self.action,), self.__dict__
+
 
 class ActionCancelledError(MissionError):
     """An awaited action was cancelled from outside the waiting mission.
@@ -77,6 +80,9 @@ class ActionCancelledError(MissionError):
     def __init__(self, action: Any) -> None:
         self.action = action
         super().__init__(f"{type(action).__name__} was cancelled: {action.error_message}")
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return type(self), (self.action,), self.__dict__
 
 
 class MissionDeadlockError(MissionError):

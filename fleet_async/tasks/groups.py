@@ -92,11 +92,12 @@ class Nursery:
             if self._owner is None:
                 self._fail_unless_joined(mission, error)
             else:
-                self._fail(error)
+                self.fail(error)
         if self.live == 0 and self._join is not None and not self._join.triggered:
             self._join.succeed()
 
-    def _fail(self, error: BaseException) -> None:
+    def fail(self, error: BaseException) -> None:
+        """Record ``error`` and cancel the group's scope (the run's, for the root group)."""
         self.errors.append(error)
         self.cancel_scope.cancel()
 
@@ -105,7 +106,7 @@ class Nursery:
 
         def unless_joined(_: SimEvent) -> None:
             if waiters is not None and len(waiters) == 1:  # nobody but this check
-                self._fail(error)
+                self.fail(error)
 
         if waiters is not None:
             waiters.append(unless_joined)

@@ -17,11 +17,12 @@ mission runs (``fleet_async.tasks.missions.dispatch``).
 
 from __future__ import annotations
 
+import collections.abc
 import heapq
 import itertools
 import threading
 from collections.abc import Callable, Generator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from fleet_async.tasks.errors import Cancelled, NoMissionRuntimeError
 
@@ -58,15 +59,23 @@ class SimEvent:
     until triggered), and three hooks, ``guard``, ``uncancellable`` and ``abandon``.
     """
 
-    __slots__ = ("callbacks", "kernel", "ok", "raw_value")
+    __slots__ = ("_defused", "callbacks", "kernel", "ok", "raw_value")
 
+    fails_run_unhandled = True
+    """A failure of this event that nobody waits on fails the run unless it is defused
+    (SimPy's rule); False for events whose failures are reported another way (missions)."""
+    per_waiter = False
+    """The failure is made for one waiter (an interrupt, a cancellation): thrown as is. Other
+    failures are thrown as a copy per waiter, chained to the original."""
     guard: Callable[[Mission], bool] | None = None
     """Checked before the kernel resumes a mission from this event (deliveries only)."""
     uncancellable = False
     """A park on this event is not ended by cancellation (a task group's join)."""
-    abandon: Callable[[Mission], None] | None = None
-    """Called when a mission stops waiting on this event because it was interrupted or
-    cancelled (after it left ``callbacks``): undo what the wait set up."""
+    abandon: Callable[[Mission, bool], None] | None = None
+    """Called as ``abandon(mission, cancelled)`` when a mission stops waiting on this event
+    because it was cancelled (``cancelled`` True) or interrupted (False), after it left
+    ``callbacks``: undo what the wait set up (a cancellation withdraws a request; an interrupt
+    leaves it queued, as SimPy does, for the mission to await again)."""
 
     def __init__(self, kernel: Kernel) -> None:
         self.kernel = kernel
@@ -74,6 +83,16 @@ class SimEvent:
         self.raw_value: Any = PENDING
         self.ok = True
         """Whether the event succeeded (meaningful once triggered)."""
+
+    @property
+    def defused(self) -> bool:
+        """Whether a failure of this event nobody waits on is accepted (does not fail the
+        run). Set it to True to let an event fail unobserved."""
+        return bool(getattr(self, "_defused", False))
+
+    @defused.setter
+    def defused(self, value: bool) -> None:
+        self._defused = bool(value)
 
     @property
     def triggered(self) -> bool:
@@ -142,6 +161,17 @@ class SimEvent:
             raise kernel.outside_error("awaiting a sim event")
         return (yield self)
 
+    # A host event loop that is handed a sim event as a task (anyio's start_soon(sim.sleep,
+    # 1) in a task group of anyio's, asyncio.create_task(sim.sleep(1))) steps it as a
+    # coroutine: say what happened instead of failing somewhere inside that library.
+    def send(self, value: Any) -> NoReturn:
+        """Refuse to run as a task of the host event loop (see the class doc)."""
+        raise NoMissionRuntimeError(_host_task_message(self))
+
+    def throw(self, *args: Any) -> NoReturn:
+        """Refuse to run as a task of the host event loop (see the class doc)."""
+        raise NoMissionRuntimeError(_host_task_message(self))
+
     def __and__(self, other: SimEvent) -> SimEvent:
         from fleet_async.tasks.conditions import AllOf  # conditions build on events
 
@@ -207,6 +237,13 @@ class Kernel:
         """Wall time (perf_counter) at which ``holding`` started its non-sim await."""
         self.holding_what: Any = None
         """What ``holding`` awaits (the object forwarded to the host loop)."""
+        self.resumes = 0
+        """Resumptions of missions so far (the watchdog thread tells a mission that runs on
+        from one that was resumed again)."""
+        self.on_unhandled: Callable[[SimEvent], None] | None = None
+        """Told about a failed event that nobody waited on and nobody defused."""
+        self.after_event: Callable[[], None] | None = None
+        """Called after each processed event (invariant checks in tests; None in runs)."""
         self.in_step = 0
         """1 while the simulation runs a step (events it triggers are due at the step's end),
         else 0."""
@@ -316,22 +353,29 @@ class Kernel:
 _thread = threading.get_ident
 
 
+def _host_task_message(event: SimEvent) -> str:
+    return (
+        f"{event!r} was started as a task of the host event loop (anyio.create_task_group()"
+        ".start_soon, asyncio.create_task, a trio nursery): such tasks run outside sim time "
+        "and cannot wait on it. Inside missions start missions instead: "
+        "'async with sim.task_group() as tg: tg.start_soon(...)', or sim.spawn(...)"
+    )
+
+
+collections.abc.Coroutine.register(SimEvent)  # so that the host loop steps it and hears why
+
+
 def _never(_: BaseException) -> bool:
     return False
 
 
 def kernel_of(sim: Any, what: str) -> Kernel:
-    """The kernel of the run in progress on ``sim``.
+    """The kernel of ``sim``'s mission runtime (made on first use).
 
     Raises:
-        NoMissionRuntimeError: if no ``fleet_async.run`` is in progress.
+        NoMissionRuntimeError: when called from another thread than the runtime's.
     """
-    runtime = sim.mission_runtime
-    if runtime is None:
-        raise NoMissionRuntimeError(
-            f"{what} needs a running mission: start missions with fleet_async.run(sim, main)"
-        )
-    kernel: Kernel = runtime.kernel
+    kernel: Kernel = sim.ensure_mission_runtime().kernel
     if _thread() != kernel.thread:
         raise kernel.outside_error(what)
     return kernel

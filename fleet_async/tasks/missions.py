@@ -9,6 +9,7 @@ with ``sim.any_of`` / ``sim.all_of``.
 
 from __future__ import annotations
 
+import copy
 import heapq
 import inspect
 import logging
@@ -42,7 +43,9 @@ class Mission(SimEvent):
     __slots__ = (
         "_children",
         "_coro",
+        "_kept",
         "_nursery",
+        "_owned",
         "_root_scope",
         "cancelled",
         "key",
@@ -60,6 +63,8 @@ class Mission(SimEvent):
         self.key = key
         self._nursery = nursery
         self._children = 0
+        self._owned: list[Any] | None = None  # ActionWaits of the actions it queued
+        self._kept: list[Any] | None = None  # requests it was interrupted from
         self.cancelled = False
         """Whether it ended by cancellation."""
         self.target: SimEvent | None = None
@@ -68,9 +73,50 @@ class Mission(SimEvent):
         self.scope = self._root_scope
         """Its innermost cancel scope (its own root scope while it is in no other)."""
 
+    fails_run_unhandled = False  # a mission's failure reaches its group (or the run) itself
+
     def __repr__(self) -> str:
         state = "alive" if self.raw_value is PENDING else "ended"
         return f"<Mission {self.name!r} {state}>"
+
+    # ----- what it leaves behind ------------------------------------------------------------
+
+    def own(self, wait: Any) -> None:
+        """An action it queued (an ActionWait): cancelled if unfinished when it ends."""
+        owned = self._owned
+        if owned is None:
+            self._owned = [wait]
+            return
+        if len(owned) >= 32:  # a long-lived mission: forget the finished ones
+            owned[:] = [w for w in owned if not w.done]
+        owned.append(wait)
+
+    def keep_request(self, request: Any) -> None:
+        """A request it was interrupted from: it stays for the mission to await again, and is
+        withdrawn if the mission ends without doing so."""
+        if self._kept is None:
+            self._kept = []
+        if request not in self._kept:
+            self._kept.append(request)
+
+    def drop_kept_request(self, request: Any) -> bool:
+        """Forget ``request`` as kept; return whether it was."""
+        kept = self._kept
+        if kept and request in kept:
+            kept.remove(request)
+            return True
+        return False
+
+    def _leave_behind(self) -> None:
+        """It ended: cancel its unfinished actions, withdraw the requests it left."""
+        owned, self._owned = self._owned, None
+        if owned:
+            for wait in owned:
+                wait.drop_owned()
+        kept, self._kept = self._kept, None
+        if kept:
+            for request in kept:
+                request.withdraw()
 
     # ----- the handle ---------------------------------------------------------------------
 
@@ -143,7 +189,7 @@ class Mission(SimEvent):
         if target is not None and target.callbacks is not None and self in target.callbacks:
             target.callbacks.remove(self)
             if target.abandon is not None:
-                target.abandon(self)
+                target.abandon(self, True)
         try:
             self._coro.close()
         except BaseException:  # a finally block that awaits cannot run any more
@@ -152,6 +198,7 @@ class Mission(SimEvent):
         kernel.missions.pop(self, None)
         self.target = None
         self._root_scope.detach()
+        self._leave_behind()
         self.cancelled = True
         self.ok = False
         self.raw_value = MissionCancelledError(f"mission {self.name!r} was stopped with the run")
@@ -169,8 +216,10 @@ class Mission(SimEvent):
         awaits something else, which is returned for the host loop to serve."""
         kernel = self.kernel
         kernel.current = self
+        kernel.resumes += 1
         self.target = None
         coro = self._coro
+        swallowed = 0
         while True:
             try:
                 request = coro.throw(value) if throw else coro.send(value)
@@ -189,25 +238,48 @@ class Mission(SimEvent):
             if request.kernel is not kernel:
                 throw, value = True, RuntimeError(f"{request!r} belongs to another run")
                 continue
+            if self._kept is not None:
+                self.drop_kept_request(request)  # awaited again: it is the mission's once more
             if kernel.cancelled_open and not request.uncancellable and self.scope.cancelled():
                 if request.abandon is not None:  # it never waits: undo what the wait set up
-                    request.abandon(self)
+                    request.abandon(self, True)
+                swallowed += 1
+                if swallowed > _SWALLOW_LIMIT:
+                    self._end(False, self._swallow_error())
+                    return PARKED
                 throw, value = True, kernel.cancelled_exc()
                 continue
             callbacks = request.callbacks
             if callbacks is None:  # processed already: its value is ready
                 throw, value = not request.ok, request.raw_value
+                if throw and not request.per_waiter:
+                    value = waiter_copy(value)
                 continue
             callbacks.append(self)
             self.target = request
             kernel.current = None
             return PARKED
 
+    def _swallow_error(self) -> RuntimeError:
+        """It caught its cancellation and awaited sim time again, over and over, at once: it
+        would keep the run busy forever. End it (its ``finally`` blocks run) and say so."""
+        try:
+            self._coro.close()
+        except BaseException:  # it ignored even GeneratorExit: its frames are gone anyway
+            logger.exception("mission %r did not close cleanly", self.name)
+        return RuntimeError(
+            f"mission {self.name!r} caught its cancellation and awaited sim time again "
+            f"{_SWALLOW_LIMIT} times in a row: a mission must let Cancelled propagate (clean "
+            "up in 'finally', or await in 'with sim.cancel_scope(shield=True)'); it was ended"
+        )
+
     def _end(self, ok: bool, value: Any, quietly: bool = False) -> None:
         kernel = self.kernel
         kernel.current = None
         del kernel.missions[self]
         self.target = None
+        if self._owned is not None or self._kept is not None:
+            self._leave_behind()
         if self.scope is not self._root_scope and not quietly:
             ok, value = False, self._stray_scope_error(value)
         self._root_scope.detach()
@@ -233,6 +305,25 @@ class Mission(SimEvent):
                 kernel.on_failure(self, value)
         kernel.schedule(self)  # whoever joins it resumes
         self._nursery.child_done(self, error)
+
+
+_SWALLOW_LIMIT = 1000
+"""Cancellations a mission may catch in a row, awaiting again at once each time, before it
+is ended as one that would never stop."""
+
+
+def waiter_copy(error: BaseException) -> BaseException:
+    """The failure one waiter of a shared failed event raises: a copy chained to the original
+    (SimPy's rule), so that waiters' tracebacks do not mix; the original if it cannot be
+    copied."""
+    try:
+        twin = copy.copy(error)
+    except Exception:  # an exception type whose arguments do not rebuild it
+        return error
+    if type(twin) is not type(error) or twin is error:
+        return error
+    twin.__cause__ = error
+    return twin
 
 
 def start_mission(
@@ -303,6 +394,7 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
     """
     queue = kernel.queue
     heappop = heapq.heappop
+    after = kernel.after_event
     while queue and queue[0][0] <= kernel.now:
         event = heappop(queue)[3]
         callbacks = event.callbacks
@@ -311,6 +403,9 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
             continue
         event.callbacks = None
         if not callbacks:
+            unhandled = not event.ok and event.fails_run_unhandled and not event.defused
+            if unhandled and kernel.on_unhandled is not None:
+                kernel.on_unhandled(event)
             continue
         for callback in callbacks:
             if callback.__class__ is not Mission:
@@ -319,9 +414,14 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
             guard = event.guard
             if guard is not None and not guard(callback):
                 continue
-            answer = callback.step(not event.ok, event.raw_value)
+            value = event.raw_value
+            if not event.ok and not event.per_waiter:
+                value = waiter_copy(value)
+            answer = callback.step(not event.ok, value)
             while answer is not PARKED:  # a non-sim await: the host loop serves it
                 answer = yield from _forward(kernel, callback, answer)
+        if after is not None:
+            after()
 
 
 @types.coroutine

@@ -6,8 +6,14 @@ even a free resource makes the requester yield once, as SimPy does. When a put r
 processed, waiting gets are served again, and the other way round: a release hands the slot on
 when the kernel processes it, and the new holder resumes when its own grant is processed.
 
-A request made in a ``with`` block is withdrawn when the block is left before it was served,
-so a mission that gives up waiting (a timeout, an interrupt) leaves nothing behind.
+What a mission that stops waiting leaves behind follows SimPy, with conservation as the
+invariant (no slot, amount or item is ever lost or made twice):
+
+- cancelled (a timeout, a lost race, a task group): its request is withdrawn; what a served
+  get took goes back first in line, and awaiting that get again raises;
+- interrupted: its request stays as it is, queued or served, for the mission to await again
+  (a served get hands over what it took then); leaving the request's ``with`` block, or the
+  mission's end, withdraws it as a cancellation would.
 """
 
 from __future__ import annotations
@@ -80,6 +86,8 @@ def _serve(queue: list[Any], try_one: Callable[[Any], bool]) -> None:
 class _Request(SimEvent):
     __slots__ = ("mission", "owner")
 
+    fails_run_unhandled = False  # only a withdrawn get fails, and only for a late awaiter
+
     def __init__(self, owner: Queueing, what: str) -> None:
         kernel = kernel_of(owner.sim, what)
         super().__init__(kernel)
@@ -102,6 +110,21 @@ class _Request(SimEvent):
         """Withdraw the request if it has not been served yet."""
         raise NotImplementedError
 
+    def abandon(self, mission: Any, cancelled: bool = True) -> None:
+        """Its waiting mission was cancelled (withdraw the request, unless someone else
+        waits on it) or interrupted (keep it, and withdraw it when the mission ends without
+        having awaited it again)."""
+        if self.callbacks is None or len(self.callbacks) != 1:  # only the serve callback left
+            return
+        if cancelled:
+            self.withdraw()
+        elif self.mission is not None and self.mission is mission:
+            self.mission.keep_request(self)
+
+    def withdraw(self) -> None:
+        """Nobody will take what this request got: undo it (see the subclasses)."""
+        self.cancel()
+
 
 class PutRequest(_Request):
     """A request to put into a Queueing (a resource request, a store or container put)."""
@@ -119,16 +142,10 @@ class PutRequest(_Request):
         owner.serve_puts()
 
     def cancel(self) -> None:
-        """Withdraw the request if it has not been served yet."""
+        """Withdraw the request if it has not been served yet (a granted slot is released by
+        the ``with`` block or ``acquire`` that holds it)."""
         if not self.triggered and self in self.owner.put_queue:
             self.owner.put_queue.remove(self)
-
-    def abandon(self, mission: Any) -> None:
-        """Its waiting mission was cancelled or interrupted: withdraw it if nobody else waits
-        on it and it has not been served (a granted slot is released by the ``with`` block
-        or ``acquire`` that holds it)."""
-        if self.callbacks is not None and len(self.callbacks) == 1:  # only serve_gets left
-            self.cancel()
 
 
 class GetRequest(_Request):
@@ -143,16 +160,23 @@ class GetRequest(_Request):
         owner.serve_gets()
 
     def cancel(self) -> None:
-        """Withdraw the request if it has not been served yet."""
-        if not self.triggered and self in self.owner.get_queue:
-            self.owner.get_queue.remove(self)
+        """Withdraw the request: unserved, it leaves the queue; served to a mission that was
+        interrupted before it took the result, what it took goes back (nothing is lost)."""
+        if not self.triggered:
+            if self in self.owner.get_queue:
+                self.owner.get_queue.remove(self)
+        elif self.mission is not None and self.mission.drop_kept_request(self):
+            self.withdraw()
 
-    def abandon(self, mission: Any) -> None:
-        """Its waiting mission was cancelled or interrupted: if nobody else waits on it,
-        withdraw it, or give back what it took if it was served already (nothing is lost)."""
-        if self.callbacks is None or len(self.callbacks) != 1:  # only serve_puts left
-            return
+    def withdraw(self) -> None:
+        """Withdraw it unserved, or give back what it took: awaiting it afterwards raises
+        (what it took is back in line, so handing it over too would make it twice)."""
         if not self.triggered:
             self.cancel()
         elif self.ok:
             self.owner.restore(self)
+            self.ok = False
+            self.raw_value = RuntimeError(
+                f"{self!r} was withdrawn when its mission stopped waiting on it; what it took "
+                "went back"
+            )

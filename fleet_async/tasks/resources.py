@@ -118,6 +118,9 @@ class Release(GetRequest):
         self.request = request
         super().__init__(resource, "Resource.release")
 
+    def withdraw(self) -> None:
+        """A release is never undone (the slot was given back when it was made)."""
+
 
 class Resource(Queueing):
     """``capacity`` slots, handed out by priority (lower first), then request order.
@@ -242,7 +245,8 @@ class PreemptiveResource(Resource):
     def try_put(self, request: Request) -> bool:
         """Preempt the least important holder if ``request`` outranks it, then grant."""
         if len(self.users) >= self.capacity and request.preempt:
-            victim = max(self.users, key=_request_key)
+            # The least important holder; among equals the one granted last (SimPy's choice).
+            victim = max(reversed(self.users), key=_request_key)
             if victim.key > request.key:
                 self.users.remove(victim)
                 if victim.mission is not None:  # an ended holder raises, as in SimPy

@@ -1,43 +1,69 @@
-"""The runtime of one ``fleet_async.run``: what the simulation's mission API delegates to.
+"""The mission runtime of a simulation: what the simulation's mission API delegates to.
 
-It owns the kernel (the event queue and the missions), the run's root group, and the waits
-that only the step loop can end (actions, predicates, bus events), and it brackets each step
-so that what a step causes is ordered at the step's end: actions that ended, in agent order,
-then predicates that became true, in the order they were registered.
+It owns the kernel (the event queue and the missions), the root group, and the waits that only
+the step loop can end (actions, predicates, bus events), and it brackets each step so that what
+a step causes is ordered at the step's end: actions that ended, in agent order, then predicates
+that became true, in the order they were registered.
+
+It is made on the first mission call on a simulation (so timers, events, requests and missions
+can be made before a run, and start when it starts) and lives across runs: a run that stops at
+``until`` leaves its missions waiting here, and the next ``fleet_async.run`` continues them.
+A run that fails, is stopped from outside or ends with ``then="cancel"``, and
+``sim.end_missions()``, end it; the next mission call makes a fresh one.
 """
 
 from __future__ import annotations
 
+import logging
 import math
-from collections.abc import Awaitable, Callable, Iterable
+import sys
+from collections.abc import Awaitable, Callable, Generator, Iterable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fleet_async.core.missions import SimEvents, steps_for
+from fleet_async.core.missions import SimEvents, register_mission_hook, steps_for
 from fleet_async.tasks.conditions import AllOf, AnyOf
 from fleet_async.tasks.groups import Nursery, TaskGroup, gather, race
 from fleet_async.tasks.kernel import STEP, Kernel, SimEvent, Timeout
-from fleet_async.tasks.missions import Mission
+from fleet_async.tasks.missions import Mission, dispatch
 from fleet_async.tasks.scopes import CancelScope
 from fleet_async.tasks.sync import Event, EventStream
 from fleet_async.tasks.waits import ActionWait, BusWait, PredicateWait
+
+if sys.version_info < (3, 11):  # pragma: no cover  # anyio brings the backport
+    from exceptiongroup import BaseExceptionGroup
 
 if TYPE_CHECKING:
     from fleet_async.core.missions import MissionSim
 
 __all__ = ["Runtime"]
 
+logger = logging.getLogger(__name__)
+
 
 class Runtime:
-    """Serves one simulation's sim-time awaits during one run.
+    """Serves one simulation's sim-time awaits, across runs (see the module doc).
 
     Args:
         sim: The simulation; its step count is the kernel's clock.
     """
 
+    @classmethod
+    def of(cls, sim: MissionSim) -> Runtime:
+        """The runtime of ``sim``, made and installed if it has none."""
+        runtime = sim.mission_runtime
+        if runtime is None:
+            runtime = cls(sim)
+            sim.set_mission_runtime(runtime)
+        assert isinstance(runtime, Runtime)
+        return runtime
+
     def __init__(self, sim: MissionSim) -> None:
         self.sim = sim
+        self.driving = False
+        """Whether a ``fleet_async.run`` is driving the missions now."""
+        self.closed = False
         self.kernel = Kernel(sim.step_count, sim.params.timestep)
         self.root = Nursery(self.kernel, CancelScope(self.kernel, root=True), owner=None)
         """The run's root group: the main mission and what ``sim.spawn`` starts."""
@@ -48,11 +74,70 @@ class Runtime:
         self._outcomes: list[tuple[int, int, ActionWait]] = []
         self._bus_handlers: dict[str, Callable[..., None]] = {}
         self.kernel.on_failure = self._on_mission_failed
+        self.kernel.on_unhandled = self._on_unhandled
         sim.events.on(SimEvents.ACTION_COMPLETED, self._on_action_end, priority=1_000_000)
         sim.events.on(SimEvents.ACTION_FAILED, self._on_action_end, priority=1_000_000)
 
+    def touch(self) -> None:
+        """Bring the clock to the simulation's step (outside runs the simulation may have
+        been stepped by hand; inside one, the driver keeps it)."""
+        if not self.driving:
+            self.kernel.now = self.sim.step_count
+
+    def mission_names(self) -> list[str]:
+        """Names of the missions alive, in start order."""
+        return [mission.name for mission in sorted(self.kernel.missions, key=_by_key)]
+
+    def end(self) -> None:
+        """``sim.end_missions()``: cancel what is alive at the current step, serve their
+        cleanup at this step (without stepping), close what still waits, and detach.
+
+        Raises:
+            RuntimeError: during a run.
+            BaseException: a failure of a mission's cleanup (several as an ExceptionGroup).
+        """
+        if self.driving:
+            raise RuntimeError(
+                "sim.end_missions() was called during a run: cancel missions from inside it "
+                "(mission.cancel(), a task group's cancel_scope) or stop the run with until="
+            )
+        self.touch()
+        try:
+            self.cancel_all("sim.end_missions() was called")
+        finally:
+            self.close()
+        errors = self.root.errors
+        if errors:
+            from fleet_async.tasks.groups import lone_error  # groups build on missions
+
+            raise lone_error(BaseExceptionGroup("missions failed while ending", errors))
+
+    def cancel_all(self, why: str) -> None:
+        """Cancel every mission at the current step, leaving the events due now unprocessed:
+        serve their cleanup at this step, then close those still waiting (their ``finally``
+        blocks run without sim awaits)."""
+        kernel = self.kernel
+        kernel.drop_due()
+        self.root.cancel_scope.cancel()
+        _drive_here(dispatch(kernel))
+        self.close_missions(why)
+
+    def close_missions(self, why: str) -> None:
+        """End the missions still alive without resuming them (their ``finally`` blocks run),
+        the last started first, so that children end before the groups that wait for them."""
+        missions = sorted(self.kernel.missions, key=_by_key)
+        if missions:
+            logger.warning("closing missions %s: %s", [m.name for m in missions], why)
+        for mission in reversed(missions):
+            mission.close()
+
     def close(self) -> None:
-        """Detach from the simulation."""
+        """Detach from the simulation (its next mission call makes a fresh runtime)."""
+        if self.closed:
+            return
+        self.closed = True
+        if self.sim.mission_runtime is self:
+            self.sim.set_mission_runtime(None)
         events = self.sim.events
         events.off(SimEvents.ACTION_COMPLETED, self._on_action_end)
         events.off(SimEvents.ACTION_FAILED, self._on_action_end)
@@ -84,12 +169,12 @@ class Runtime:
                     del self.predicates[key]
                     pending.succeed()
 
-    def step_driven(self) -> bool:
-        """Whether stepping can end something a mission waits on (an action, a predicate, a
-        bus event, a stream item)."""
+    def step_driven(self, besides_predicates: bool = False) -> bool:
+        """Whether stepping can end something a mission waits on (an action, a predicate
+        unless ``besides_predicates``, a bus event, a stream item)."""
         return bool(
             self.action_waits
-            or any(wait.callbacks for wait in self.predicates.values())
+            or (not besides_predicates and any(w.callbacks for w in self.predicates.values()))
             or any(stream.waiting for stream in self.streams)
             or any(wait.callbacks for table in self.bus_waits.values() for wait in table.values())
         )
@@ -107,6 +192,22 @@ class Runtime:
         wait = self.action_waits.pop(id(action), None)
         if wait is not None:
             wait.settle(in_step=bool(self.kernel.in_step))
+
+    def _on_unhandled(self, event: SimEvent) -> None:
+        """A failed event nobody waited on: it fails the run now (SimPy's rule)."""
+        error: BaseException = event.raw_value
+        where = getattr(event, "created_at", None)
+        made = f" (made at {where})" if where else ""
+        note = (
+            f"{event!r}{made} failed at sim time {self.kernel.now * self.kernel.timestep:.3f} s "
+            "and nobody waited on it: await it, or set 'event.defused = True' to let it fail "
+            "unobserved"
+        )
+        if sys.version_info >= (3, 11):
+            error.add_note(note)
+        else:  # pragma: no cover  # no notes before 3.11: say it in the log
+            logger.error(note)
+        self.root.fail(error)
 
     def _on_mission_failed(self, mission: Mission, error: BaseException) -> None:
         events = self.sim.events
@@ -169,14 +270,16 @@ class Runtime:
             step = self.kernel.now + self.steps_for(seconds, "sim.move_on_after")
         return CancelScope(self.kernel, step, shield, fail)
 
-    def wait_action(self, agent: Any, action: Any) -> ActionWait:
+    def wait_action(
+        self, agent: Any, action: Any, detached: bool = False, what: str = "agent.submit"
+    ) -> ActionWait:
         """The event for a queued action (see :class:`~fleet_async.tasks.waits.ActionWait`);
         asking twice for the same pending action gives the same event, which every waiter
         shares."""
         existing = self.action_waits.get(id(action))
         if existing is not None and existing.action is action:
             return existing
-        return ActionWait(self, agent, action)
+        return ActionWait(self, agent, action, detached, what)
 
     def wait_until(self, predicate: Callable[[], bool]) -> PredicateWait:
         """An event that succeeds once ``predicate()`` holds (now, or after a step)."""
@@ -229,8 +332,32 @@ class Runtime:
     def mission_rng(self) -> np.random.Generator:
         """A generator for the current mission, derived from the seed and its key."""
         mission = self.kernel.require_current("sim.mission_rng")
-        return np.random.default_rng([self.sim.params.seed, 0x3A55, *mission.key])
+        # The simulation's seed sequence for this key: after sim.reseed it follows the new seed.
+        return np.random.default_rng(self.sim.seed_sequence(0x3A55, *mission.key))
 
 
 def _agent_then_seq(entry: tuple[int, int, ActionWait]) -> tuple[int, int]:
     return entry[0], entry[1]
+
+
+def _by_key(mission: Mission) -> tuple[int, ...]:
+    return mission.key
+
+
+def _drive_here(coro: Generator[Any, Any, None]) -> None:
+    """Drive ``dispatch`` without a host loop: a non-sim await in cleanup cannot be served
+    here, so the mission gets an error at it."""
+    try:
+        coro.send(None)
+        while True:
+            coro.throw(
+                RuntimeError(
+                    "a mission's cleanup awaited something that is not a sim-time await "
+                    "while its missions were being ended outside a run"
+                )
+            )
+    except StopIteration:
+        pass
+
+
+register_mission_hook("mission_runtime", Runtime.of)

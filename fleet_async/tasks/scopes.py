@@ -227,6 +227,8 @@ class Delivery(SimEvent):
 
     __slots__ = ("_is_cancel",)
 
+    per_waiter = True  # each delivery is made for its mission
+
     def __init__(self, kernel: Kernel, mission: Mission, interrupt: Interrupt | None) -> None:
         super().__init__(kernel)
         self.callbacks = [mission]
@@ -246,5 +248,5 @@ class Delivery(SimEvent):
         if target.callbacks is not None:
             target.callbacks.remove(mission)
         if target.abandon is not None:
-            target.abandon(mission)
+            target.abandon(mission, self._is_cancel)
         return True

@@ -4,13 +4,16 @@
 SimPy's ``succeed(value)`` / ``fail(exc)`` / ``value``): awaiting it returns its value. Setting it
 schedules it at the current step; its waiters resume, in the order they started waiting, when
 the kernel processes it. It may be created before the run and set from outside the missions
-(a callback, another task of the host loop).
+(a callback, another task of the host loop). A failed Event that nobody waits on fails the run
+when it is processed, naming where it was made, unless ``event.defused = True``.
 
 ``sim.events.stream(name)`` is an async iterator over the simulation's bus events.
 """
 
 from __future__ import annotations
 
+import inspect
+import os
 from collections import deque
 from collections.abc import Callable, Generator
 from typing import Any
@@ -27,16 +30,17 @@ class Event(SimEvent):
         sim: The simulation whose runs the event belongs to.
     """
 
-    __slots__ = ("_sim",)
+    __slots__ = ("_sim", "created_at")
 
     def __init__(self, sim: Any) -> None:
-        runtime = sim.mission_runtime
-        super().__init__(runtime.kernel if runtime is not None else _NO_KERNEL)
+        super().__init__(kernel_of(sim, "Event"))
         self._sim = sim
+        self.created_at = _caller()
+        """Where it was made (``file:line``), for the message of an unhandled failure."""
 
     def _bind(self, what: str) -> Kernel:
         kernel = kernel_of(self._sim, what)
-        if self.kernel is not kernel:  # made before this run (or in an earlier one)
+        if self.kernel is not kernel:  # made for a runtime that was ended since
             self.kernel = kernel
             # Set back then, it counts as processed; if not, whoever waited then is gone.
             self.callbacks = None if self.raw_value is not PENDING else []
@@ -58,30 +62,18 @@ class Event(SimEvent):
         Raises:
             RuntimeError: if it was triggered already.
         """
-        if self._sim.mission_runtime is None:  # no run: nobody can be waiting
-            if self.raw_value is not PENDING:
-                raise RuntimeError(f"{self!r} has already been triggered")
-            self.ok, self.raw_value, self.callbacks = True, value, None
-            return self
         self._bind("Event.succeed")
         super().succeed(value)
         return self
 
     def fail(self, exception: BaseException) -> Event:
         """Trigger it with an exception, which its waiters raise."""
-        if self._sim.mission_runtime is None:  # no run: nobody can be waiting
-            if self.raw_value is not PENDING:
-                raise RuntimeError(f"{self!r} has already been triggered")
-            if not isinstance(exception, BaseException):
-                raise TypeError(f"fail() expects an exception, got {exception!r}")
-            self.ok, self.raw_value, self.callbacks = False, exception, None
-            return self
         self._bind("Event.fail")
         super().fail(exception)
         return self
 
     def rebind(self, kernel: Kernel) -> bool:
-        """An Event made before this run joins it when a condition takes it."""
+        """An Event made for an ended runtime joins this one when a condition takes it."""
         runtime = self._sim.mission_runtime
         if runtime is not None and runtime.kernel is kernel:
             self._bind("sim.any_of / sim.all_of")
@@ -106,11 +98,17 @@ class Event(SimEvent):
         return (yield self)
 
 
-class _NoKernel(Kernel):
-    """Stands in for the kernel of an Event made outside a run."""
+def _caller() -> str:
+    """``file:line`` of the first frame outside the mission layer (who made the event)."""
+    frame = inspect.currentframe()
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE):
+        frame = frame.f_back
+    if frame is None:
+        return "an unknown place"
+    return f"{frame.f_code.co_filename}:{frame.f_lineno}"
 
 
-_NO_KERNEL = _NoKernel()
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 
 
 class EventStream:
@@ -189,5 +187,5 @@ class _StreamWait(SimEvent):
         super().__init__(kernel)
         self._stream = stream
 
-    def abandon(self, mission: Any) -> None:
+    def abandon(self, mission: Any, cancelled: bool = True) -> None:
         self._stream.abandon(self)

@@ -11,6 +11,7 @@ its robot in that step), unless another mission still waits on it.
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.missions import ActionStatus, MoveAction, WaitAction
@@ -18,9 +19,12 @@ from fleet_async.tasks.errors import ActionCancelledError, ActionFailedError
 from fleet_async.tasks.kernel import SimEvent
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Generator
 
+    from fleet_async.tasks.missions import Mission
     from fleet_async.tasks.runtime import Runtime
+
+logger = logging.getLogger(__name__)
 
 __all__ = ["ActionWait", "BusWait", "PredicateWait", "action_error"]
 
@@ -36,15 +40,37 @@ def action_error(action: Any) -> BaseException | None:
 
 class ActionWait(SimEvent):
     """A queued action, as an event and a handle: ``await`` it, ``cancel()`` it, watch its
-    ``status``, ``phase`` and ``progress``."""
+    ``status``, ``phase`` and ``progress``.
 
-    __slots__ = ("_runtime", "action", "agent")
+    Args:
+        runtime: The mission runtime.
+        agent: The robot whose queue holds the action.
+        action: The action.
+        detached: The action outlives the mission that queued it; its failure is logged.
+        what: How messages name the call that queued it (``agent.move`` ...).
+    """
 
-    def __init__(self, runtime: Runtime, agent: Any, action: Any) -> None:
+    __slots__ = ("_runtime", "action", "agent", "detached", "what")
+
+    fails_run_unhandled = False  # the robot's outcome: on the bus, and raised when awaited
+
+    def __init__(
+        self,
+        runtime: Runtime,
+        agent: Any,
+        action: Any,
+        detached: bool = False,
+        what: str = "agent.submit",
+    ) -> None:
         super().__init__(runtime.kernel)
         self._runtime = runtime
         self.agent = agent
         self.action = action
+        self.detached = detached
+        self.what = what
+        owner = runtime.kernel.current
+        if not detached and owner is not None:
+            owner.own(self)
         if action.is_complete():
             self.settle(in_step=False)
         else:
@@ -58,17 +84,34 @@ class ActionWait(SimEvent):
             self.ok, self.raw_value = True, self.action
         else:
             self.ok, self.raw_value = False, error
+            if self.detached and self.action.status is ActionStatus.FAILED:
+                logger.warning("detached %s of %r failed: %s", self.what, self.agent.name, error)
         if in_step:
             self._runtime.outcome(self)
         else:
             self.kernel.schedule(self)
 
-    def abandon(self, mission: Any) -> None:
-        """Its only waiter stopped waiting: cancel the action (whose end then settles this
-        event, so awaiting it again raises ActionCancelledError)."""
+    def abandon(self, mission: Any, cancelled: bool = True) -> None:
+        """Its only waiter stopped waiting (cancelled or interrupted): cancel the action
+        (whose end then settles this event, so awaiting it again raises
+        ActionCancelledError)."""
         if self.callbacks or self.action.is_complete():
             return  # another mission still waits on it, or it is over
         self.action.cancel()
+
+    def drop_owned(self) -> None:
+        """The mission that queued the action ended: cancel the action if it is unfinished
+        (a queued one is dropped, a running one stops its robot)."""
+        if not self.action.is_complete():
+            self.action.cancel()
+
+    def __await__(self) -> Generator[Any, Any, Any]:
+        kernel = self.kernel
+        if kernel.current is None:
+            if not self.callbacks:  # nobody else waits: nothing keeps it moving for nobody
+                self.action.cancel()
+            raise kernel.outside_error(f"{self.what}(...)")
+        return (yield from super().__await__())
 
     # ----- the handle -----------------------------------------------------------------------
 
@@ -130,7 +173,7 @@ class PredicateWait(SimEvent):
         else:
             runtime.predicates[id(self)] = self
 
-    def abandon(self, mission: Any) -> None:
+    def abandon(self, mission: Mission, cancelled: bool = True) -> None:
         """Its only waiter stopped waiting: stop checking the predicate."""
         if not self.callbacks:
             self._runtime.predicates.pop(id(self), None)
@@ -149,7 +192,7 @@ class BusWait(SimEvent):
         self.where = where
         runtime.add_bus_wait(self)
 
-    def abandon(self, mission: Any) -> None:
+    def abandon(self, mission: Mission, cancelled: bool = True) -> None:
         """Its only waiter stopped waiting: stop listening."""
         if not self.callbacks:
             self._runtime.bus_waits.get(self.name, {}).pop(id(self), None)

@@ -5,6 +5,12 @@ no build step) and the trace on a local port; :class:`TraceReader` reads a trace
 arrays. Traces are written by ``sim.start_trace`` (``fleet_async.core.view.trace``).
 """
 
-from fleet_async.viewer.reader import Frame, TraceFormatError, TraceReader, check_trace
+from fleet_async.viewer.reader import (
+    Frame,
+    TraceCutWarning,
+    TraceFormatError,
+    TraceReader,
+    check_trace,
+)
 
-__all__ = ["Frame", "TraceFormatError", "TraceReader", "check_trace"]
+__all__ = ["Frame", "TraceCutWarning", "TraceFormatError", "TraceReader", "check_trace"]

@@ -8,9 +8,9 @@ users, the ``view`` command's checks and tests.
 
 from __future__ import annotations
 
-import json
 import os
 import struct
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,18 +26,33 @@ from fleet_async.core.view.trace.format import (
     YAW_SCALE,
     RecordKind,
 )
+from fleet_async.viewer.payloads import (
+    PayloadError,
+    bodies_payload,
+    collisions_size,
+    entries,
+    frames_size,
+    json_payload,
+    layout_size,
+    meta_payload,
+)
 
-__all__ = ["Frame", "TraceFormatError", "TraceReader", "check_trace"]
+__all__ = ["Frame", "TraceCutWarning", "TraceFormatError", "TraceReader", "check_trace"]
 
 _FRAMES_HEADER = struct.Struct("<II")
 
 
 class TraceFormatError(ValueError):
-    """A file is not a trace this version can read, or it is cut short.
+    """A file is not a trace this version can read, or one of its records is malformed.
 
-    The message names the file, what is wrong and the format version (the file's, when its
-    header could be read, and the one this reader reads).
+    The message names the file, what is wrong (for a record: its number, kind and byte offset)
+    and the format version (the file's, when its header could be read, and the ones this
+    reader reads). It is the only error the reader raises for a file's contents.
     """
+
+
+class TraceCutWarning(UserWarning):
+    """A trace ends early (a killed run, a copy cut short): its readable prefix is loaded."""
 
 
 @dataclass(frozen=True)
@@ -70,18 +85,31 @@ class _Chunk:
 class TraceReader:
     """Index a trace file and read its frames and events.
 
+    A trace that ends early (a record cut short, or no end record: the run was killed, or the
+    copy is incomplete) loads its readable prefix: :attr:`cut` says what is missing, and a
+    :class:`TraceCutWarning` is issued (not for ``allow_unfinished``, whose file is expected
+    to grow). ``strict=True`` refuses such a file instead.
+
     Args:
         path: The trace file.
-        allow_unfinished: Accept a file that has no end record yet (a run in progress, or one
-            that crashed); a record cut short is an error all the same.
+        allow_unfinished: The file is still being written (a live run): an end that is not
+            there yet is no surprise, so no warning.
+        strict: Refuse a trace that ends early (TraceFormatError) instead of loading its prefix.
 
     Raises:
         FileNotFoundError: if ``path`` does not exist.
-        TraceFormatError: for a file that is not a trace, another format version, or one that
-            is truncated.
+        TraceFormatError: for a file that is not a trace, another format version, a malformed
+            record (naming its number, kind and byte), no META record before the cut, or (with
+            ``strict``) one that ends early.
     """
 
-    def __init__(self, path: str | os.PathLike[str], *, allow_unfinished: bool = False) -> None:
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        allow_unfinished: bool = False,
+        strict: bool = False,
+    ) -> None:
         self.path = Path(path)
         self._data = np.memmap(self.path, dtype=np.uint8, mode="r") if self._size() else None
         # The same bytes as a buffer, for struct (numpy arrays are not typed as buffers).
@@ -94,10 +122,22 @@ class TraceReader:
         """Fleet masters' commands: ``step`` (the step count when applied), ``vehicle``,
         ``command`` (JSON data, ``fleet_async.interfaces.command_from_json`` reads it)."""
         self.end: dict[str, Any] | None = None
+        self.cut: str | None = None
+        """Why the file ends before its end record (None for a complete trace)."""
         self._chunks: list[_Chunk] = []
         self._collisions: list[tuple[np.ndarray, ...]] = []
         self._version = self._read_header()
-        self._index(allow_unfinished)
+        self._index()
+        if self.cut is not None:
+            if strict:
+                raise self._error(self.cut, self._version)
+            if not allow_unfinished:
+                warnings.warn(
+                    f"{self.path}: {self.cut}; showing the readable prefix ({self.frame_count} "
+                    "frames)",
+                    TraceCutWarning,
+                    stacklevel=2,
+                )
 
     def _size(self) -> int:
         return self.path.stat().st_size
@@ -125,75 +165,84 @@ class TraceReader:
             )
         if version not in READABLE_VERSIONS:
             raise self._error(f"unsupported trace format version {version}", version)
-        if header_size < HEADER.size:
+        if not HEADER.size <= header_size <= len(data):
             raise self._error(f"bad header size {header_size}", version)
         return int(version)
 
-    def _index(self, allow_unfinished: bool) -> None:
+    def _index(self) -> None:
         data = self._data
         assert data is not None
         offset = HEADER.unpack_from(self._bytes, 0)[2]
         layout = np.zeros(0, dtype=np.int32)
         records = 0
-        while offset < len(data):
+        while offset < len(data) and self.end is None:
             if offset + RECORD.size > len(data):
-                raise self._error(
+                self.cut = (
                     f"truncated: record {records} at byte {offset} has only "
-                    f"{len(data) - offset} of its {RECORD.size} header bytes",
-                    self._version,
+                    f"{len(data) - offset} of its {RECORD.size} header bytes"
                 )
+                break
             kind, length = RECORD.unpack_from(self._bytes, offset)
+            name = RecordKind(kind).name if kind in RecordKind._value2member_map_ else str(kind)
             start = offset + RECORD.size
             if start + length > len(data):
-                name = RecordKind(kind).name if kind in RecordKind._value2member_map_ else kind
-                raise self._error(
+                self.cut = (
                     f"truncated: record {records} ({name}) at byte {offset} needs {length} "
-                    f"payload bytes, the file has {len(data) - start} left",
-                    self._version,
+                    f"payload bytes, the file has {len(data) - start} left"
                 )
-            layout = self._record(kind, start, length, layout)
+                break
+            try:
+                layout = self._record(kind, start, length, layout)
+            except (PayloadError, ValueError, TypeError, KeyError, struct.error) as exc:
+                raise self._error(
+                    f"record {records} ({name}) at byte {offset}: {exc}", self._version
+                ) from None
             records += 1
             offset = start + length + (-length % 4)
-        if self.end is None and not allow_unfinished:
-            raise self._error(
+        if self.end is None and self.cut is None:
+            self.cut = (
                 f"truncated: no end record after {records} records (the run did not finish "
-                "its trace: it is still running, or it stopped without stop_trace / close)",
-                self._version,
+                "its trace: it is still running, or it stopped without stop_trace / close)"
             )
+        if not self.meta:
+            problem = self.cut or f"no META record in {records} records"
+            raise self._error(f"{problem}; nothing to show before it (no META)", self._version)
 
-    def _json(self, start: int, length: int) -> Any:
+    def _raw(self, start: int, length: int) -> bytes:
         assert self._data is not None
-        return json.loads(bytes(self._data[start : start + length]).decode("utf-8"))
+        return bytes(self._data[start : start + length])
 
     def _record(self, kind: int, start: int, length: int, layout: np.ndarray) -> np.ndarray:
         data = self._data
         assert data is not None
+        if kind != RecordKind.META and not self.meta:
+            raise PayloadError("a record before the META record")
         if kind == RecordKind.META:
-            self.meta = self._json(start, length)
+            self.meta = meta_payload(self._raw(start, length))
         elif kind == RecordKind.BODIES:
-            value = self._json(start, length)
-            self.shapes.extend(value["shapes"])
-            for body in value["bodies"]:
+            shapes, bodies = bodies_payload(self._raw(start, length))
+            self.shapes.extend(shapes)
+            for body in bodies:
                 self.bodies[int(body["id"])] = body
         elif kind == RecordKind.LAYOUT:
-            (n,) = struct.unpack_from("<I", self._bytes, start)
+            n = layout_size(self._bytes, start, length)
             layout = np.frombuffer(data, dtype="<i4", count=n, offset=start + 4)
         elif kind == RecordKind.FRAMES:
-            count, n = _FRAMES_HEADER.unpack_from(self._bytes, start)
+            count, n = frames_size(self._bytes, start, length)
             if n != len(layout):
-                raise self._error(
-                    f"FRAMES record at byte {start - RECORD.size} holds {n} bodies per frame, "
-                    f"but the layout before it lists {len(layout)}",
-                    self._version,
+                raise PayloadError(
+                    f"it holds {n} bodies per frame, but the layout before it lists {len(layout)}"
                 )
             self._chunks.append(_Chunk(start + _FRAMES_HEADER.size, count, n, layout))
         elif kind == RecordKind.EVENTS:
-            for t, step, name, object_id, payload in self._json(start, length)["events"]:
+            for t, step, name, object_id, payload in entries(
+                self._raw(start, length), "EVENTS", "events", 5
+            ):
                 self.events.append(
                     {"t": t, "step": step, "kind": name, "object_id": object_id, "data": payload}
                 )
         elif kind == RecordKind.COLLISIONS:
-            (n,) = struct.unpack_from("<I", self._bytes, start)
+            n = collisions_size(self._bytes, start, length)
             at = start + 4
             steps, a, b = (
                 np.frombuffer(data, dtype="<i4", count=n, offset=at + 4 * n * i) for i in range(3)
@@ -201,10 +250,12 @@ class TraceReader:
             started = np.frombuffer(data, dtype=np.uint8, count=n, offset=at + 12 * n)
             self._collisions.append((steps, a, b, started))
         elif kind == RecordKind.COMMANDS:
-            for step, vehicle, command in self._json(start, length)["commands"]:
+            for step, vehicle, command in entries(
+                self._raw(start, length), "COMMANDS", "commands", 3
+            ):
                 self.commands.append({"step": step, "vehicle": vehicle, "command": command})
         elif kind == RecordKind.END:
-            self.end = self._json(start, length)
+            self.end = json_payload(self._raw(start, length), "END")
         return layout
 
     # ----- what the file holds ---------------------------------------------------------
@@ -263,11 +314,14 @@ class TraceReader:
         }
 
 
-def check_trace(path: str | os.PathLike[str], *, allow_unfinished: bool = False) -> TraceReader:
-    """Open ``path`` as a trace and check every record; return the reader.
+def check_trace(
+    path: str | os.PathLike[str], *, allow_unfinished: bool = False, strict: bool = False
+) -> TraceReader:
+    """Open ``path`` as a trace and check every record; return the reader (its ``cut`` says
+    whether the file ends early; see :class:`TraceReader`).
 
     Raises:
         FileNotFoundError: if the file does not exist.
         TraceFormatError: naming the file, the problem and the format version.
     """
-    return TraceReader(path, allow_unfinished=allow_unfinished)
+    return TraceReader(path, allow_unfinished=allow_unfinished, strict=strict)

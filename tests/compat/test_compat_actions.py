@@ -18,6 +18,7 @@ from fleet_async.action import (
     WaitAction,
 )
 from fleet_async.agent import Agent
+from fleet_async.events import SimEvents
 from fleet_async.geometry import Path, Pose
 from fleet_async.sim_object import ShapeParams, SimObject
 from fleet_async.types import ActionStatus
@@ -172,3 +173,67 @@ def test_a_fixed_arm_picks_and_drops_from_where_it_stands(sim, caplog):
     assert arm.get_pose().position.tolist() == base
     assert not cube.is_attached()
     assert cube.get_pose().position.tolist() == pytest.approx([0.4, 0.3, 0.05])
+
+
+# pybullet_fleet 0.8.0's PickAction / DropAction refuse joint_targets together with
+# ee_target_position (a ValueError when the action is made), and leave the arm where the reach
+# took it: at the joint targets, or at the IK solution for the end-effector target.
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda **arm: PickAction(target_object_id=1, **arm),
+        lambda **arm: DropAction(drop_pose=Pose.from_xyz(0, 0.4, 0.05), **arm),
+    ],
+    ids=["pick", "drop"],
+)
+def test_joint_targets_and_an_end_effector_target_are_refused_together(make):
+    with pytest.raises(ValueError, match=r"joint_targets.*ee_target_position.*not both") as info:
+        make(joint_targets={"shoulder_to_elbow": 1.0}, ee_target_position=[0.4, 0.0, 0.2])
+    assert "Action" in str(info.value) and "[0.4, 0.0, 0.2]" in str(info.value)
+    with pytest.raises(ValueError, match="not both"):  # an empty mapping is still given
+        make(joint_targets={}, ee_target_position=[0.4, 0.0, 0.2])
+    make(joint_targets=[0.1, 0.2, 0.0, 0.0])
+    make(ee_target_position=[0.4, 0.0, 0.2])
+
+
+def _joint_positions(arm):
+    return [arm.get_joint_state_by_name(n)[0] for n in arm.joint_names]
+
+
+def test_arm_pick_and_drop_leave_the_arm_at_the_targets(sim):
+    arm = Agent.from_urdf("arm_robot", use_fixed_base=True, sim_core=sim)
+    box = SimObject.from_mesh(CUBE, CUBE, Pose.from_xyz(0.5, 0.0, 0.2), sim_core=sim)
+    low = SimObject.from_mesh(CUBE, CUBE, Pose.from_xyz(0.45, 0.0, 0.05), sim_core=sim)
+    pick_at = {"shoulder_to_elbow": 1.0}
+    arrived = []
+
+    def note_arrival(sim, **_):
+        if not arrived and arm.are_joints_at_targets(pick_at, 0.001):
+            arrived.append(sim.sim_time)
+
+    sim.events.on(SimEvents.POST_STEP, note_arrival)
+    pick = PickAction(target_object_id=box.body_id, joint_targets=pick_at, joint_tolerance=0.001)
+    drop = DropAction(
+        drop_pose=Pose.from_xyz(0.0, 0.45, 0.05),
+        joint_targets={"base_to_shoulder": 1.5, "shoulder_to_elbow": 0.5},
+        joint_tolerance=0.001,
+    )
+    arm.add_action_sequence([pick, drop])
+    while not pick.is_complete():
+        sim.step_once()
+    assert pick.status is ActionStatus.COMPLETED and box.get_attached_parent() is arm
+    assert arrived == [pick.end_time]  # done in the step the reach ended: no lift after it
+    while not drop.is_complete():
+        sim.step_once()
+    assert drop.status is ActionStatus.COMPLETED and not box.is_attached()
+    for _ in range(10):
+        sim.step_once()
+    assert _joint_positions(arm) == pytest.approx([1.5, 0.5, 0.0, 0.0], abs=0.001)
+    reach = PickAction(target_object_id=low.body_id, ee_target_position=[0.45, 0.0, 0.1])
+    arm.add_action(reach)
+    for _ in range(60):
+        sim.step_once()
+    assert reach.status is ActionStatus.COMPLETED and low.get_attached_parent() is arm
+    assert arm.are_ee_at_target([0.45, 0.0, 0.1])  # still reaching: not lifted back

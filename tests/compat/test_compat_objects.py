@@ -9,9 +9,11 @@ import pybullet as p
 import pytest
 
 from fleet_async.agent import Agent, AgentSpawnParams
+from fleet_async.core_simulation import MultiRobotSimulationCore
 from fleet_async.geometry import Pose
 from fleet_async.sim_object import ShapeParams, SimObject, SimObjectSpawnParams
 from fleet_async.types import CollisionMode
+from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.1, 0.1, 0.1])
 
@@ -115,6 +117,38 @@ def test_from_urdf_mass_none_keeps_and_reports_the_urdf_masses(sim):
     light = Agent.from_urdf("kuka_iiwa", use_fixed_base=True, mass=0.0, sim_core=sim)
     assert light.mass == 0.0 and light.is_kinematic and not kuka.is_kinematic
     assert p.getDynamicsInfo(light.body_id, 3, physicsClientId=sim.client)[0] == 0.0
+
+
+# AgentSpawnParams(mass=None): pybullet_fleet 0.8.0 hands it to Agent.from_urdf, whose None
+# keeps the URDF's own masses; for a mesh or virtual agent it fails when spawning (a TypeError
+# from PyBullet), here when the parameters are made, naming the field.
+
+
+@pytest.mark.parametrize("physics", [False, True])
+def test_agent_spawn_params_mass_none_keeps_the_urdf_masses(physics):
+    with MultiRobotSimulationCore(headless_params(physics=physics)) as sim:
+        params = AgentSpawnParams(urdf_path="kuka_iiwa", use_fixed_base=True, mass=None)
+        kuka = Agent.from_params(params, sim)
+        links = [
+            p.getDynamicsInfo(kuka.body_id, i, physicsClientId=sim.client)[0] for i in range(7)
+        ]
+        assert links == pytest.approx([4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3])
+        assert kuka.mass == pytest.approx(17.5) and not kuka.is_kinematic
+        config = {"urdf_path": "mobile_robot", "mass": None, "pose": [2, 0, 0.1]}
+        rover = Agent.from_params(AgentSpawnParams.from_dict(config), sim)
+        assert rover.mass > 0 and not rover.is_kinematic
+        default = Agent.from_params(AgentSpawnParams(urdf_path="mobile_robot"), sim)
+        assert default.mass == 0.0 and default.is_kinematic  # the default is still 0.0
+
+
+def test_mass_none_without_a_urdf_is_refused():
+    with pytest.raises(ValueError, match=r"AgentSpawnParams\.mass: None .*urdf_path") as info:
+        AgentSpawnParams(visual_shape=BOX, collision_shape=BOX, mass=None)
+    assert "mesh" in str(info.value)
+    with pytest.raises(ValueError, match=r"AgentSpawnParams\.mass: None .*virtual"):
+        AgentSpawnParams(mass=None)
+    with pytest.raises(ValueError, match=r"SimObjectSpawnParams\.mass: .*None"):
+        SimObjectSpawnParams(visual_shape=BOX, mass=None)
 
 
 # SimObjectSpawnParams.from_dict: "name (str, required)"; "Raises: ValueError - If name is

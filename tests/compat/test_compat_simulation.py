@@ -1,15 +1,21 @@
 """The simulation as a pybullet_fleet script uses it (issue 15): the object registry names of
-the seed's examples, and safe paths to PyBullet's view under lazy sync."""
+the seed's examples, and safe paths to PyBullet's view under lazy sync; pybullet_fleet 0.8.0's
+behaviour where the seed is silent (issue 27): a paused simulation given to run_simulation and
+the collision method SimulationParams reports."""
 
 from __future__ import annotations
+
+import time
 
 import pybullet as p
 import pytest
 
 from fleet_async.agent import Agent
-from fleet_async.core_simulation import MultiRobotSimulationCore
+from fleet_async.core_simulation import MultiRobotSimulationCore, SimulationParams
+from fleet_async.events import SimEvents
 from fleet_async.geometry import Pose
 from fleet_async.sim_object import ShapeParams, SimObject, SimObjectSpawnParams
+from fleet_async.types import CollisionDetectionMethod
 from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.2, 0.2, 0.1])
@@ -90,3 +96,38 @@ def test_ray_tests_see_poses_written_inside_the_step(sim):
     assert hits == {"raw": -1, "ray_test": wall.body_id, "batch": [wall.body_id, -1]}
     with pytest.raises(ValueError, match="rays_to"):
         sim.ray_test_batch([[0, 0, 0]], [])
+
+
+# pybullet_fleet 0.8.0 resumes a paused simulation when run_simulation starts (its
+# initialize_simulation calls resume()), so a headless run after sim.pause() runs and returns.
+
+
+def test_run_simulation_resumes_a_paused_simulation(sim, monkeypatch):
+    def no_waiting(seconds):  # the paused run loop's only wall-clock call: a hang, made a failure
+        raise AssertionError(f"run_simulation waited {seconds} s for someone to resume it")
+
+    monkeypatch.setattr(time, "sleep", no_waiting)
+    resumed_at = []
+    sim.events.on(SimEvents.RESUMED, lambda sim, **_: resumed_at.append(sim.step_count))
+    for _ in range(3):
+        sim.step_once()
+    sim.pause()
+    sim.run_simulation(duration=1.0)
+    assert resumed_at == [3] and not sim.is_paused
+    assert sim.step_count == 13 and sim.sim_time == 13 * 0.1
+
+
+# SimulationParams.collision_detection_method: None means "pick by physics"; pybullet_fleet 0.8.0
+# stores the method it picked, so the field reports the method in force.
+
+
+def test_collision_detection_method_reports_the_method_in_force():
+    closest = CollisionDetectionMethod.CLOSEST_POINTS
+    contact = CollisionDetectionMethod.CONTACT_POINTS
+    assert SimulationParams(gui=False).collision_detection_method is closest
+    assert SimulationParams(gui=False, physics=True).collision_detection_method is contact
+    assert SimulationParams.from_dict({"physics": True}).collision_detection_method is contact
+    explicit = SimulationParams(physics=True, collision_detection_method="hybrid")
+    assert explicit.collision_detection_method is CollisionDetectionMethod.HYBRID
+    with MultiRobotSimulationCore(headless_params(physics=True)) as sim:
+        assert sim.params.collision_detection_method is contact

@@ -108,9 +108,11 @@ def test_missions_start_from_a_restored_state(tmp_path):
         original.step_once()
     original.save_state(tmp_path / "warm.ckpt")
     expected = shift(original, robot)
+    original.close()
     restored, robot2 = scene()
-    restored.restore_state(tmp_path / "warm.ckpt")
-    assert shift(restored, robot2) == expected
+    with restored:
+        restored.restore_state(tmp_path / "warm.ckpt")
+        assert shift(restored, robot2) == expected
 
 
 def test_refuses_physics_running_missions_and_object_callbacks(sim, tmp_path):

@@ -16,7 +16,9 @@ def test_defaults_match_reference():
     assert prm.max_steps_per_frame == 10 and prm.gui_min_fps == 30
     assert prm.ignore_static_collision is True and prm.profiling_interval == 100
     assert prm.spatial_hash_cell_size_mode is SpatialHashCellSizeMode.AUTO_INITIAL
-    assert prm.collision_detection_method is None and prm.collision_margin == 0.02
+    assert SimulationParams.__dataclass_fields__["collision_detection_method"].default is None
+    assert prm.collision_detection_method is CollisionDetectionMethod.CLOSEST_POINTS  # picked
+    assert prm.collision_margin == 0.02
     assert prm.multi_cell_threshold == 1.5 and prm.enable_floor is True
     assert (prm.window_width, prm.window_height) == (1024, 768)
     assert (prm.monitor_width, prm.monitor_height, prm.monitor_x, prm.monitor_y) == (

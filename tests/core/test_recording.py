@@ -323,7 +323,7 @@ def test_missing_package_says_what_to_install_before_recording(
         monkeypatch.setitem(sys.modules, module, None)
     with pytest.raises(ImportError, match=names) as info:
         sim.start_recording(tmp_path / output, **SMALL)
-    assert 'pip install "fleet-async[record]"' in str(info.value)
+    assert 'python -m pip install Pillow "imageio[pyav]"' in str(info.value)
     assert sim.events.handler_count(SimEvents.POST_STEP) == 0
     monkeypatch.undo()
     assert sim.start_recording(tmp_path / output, **SMALL).is_recording  # nothing left running

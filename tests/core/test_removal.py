@@ -68,7 +68,7 @@ async def test_moving_a_removed_robot_in_a_mission_names_it(fleet_sim):
     r = robot(fleet_sim, "picker5")
     await fleet_sim.sleep(0.5)
     fleet_sim.remove_object(r)
-    with pytest.raises(ObjectRemovedError, match=r"agent.submit: .*'picker5'.*removed"):
+    with pytest.raises(ObjectRemovedError, match=r"agent.move: .*'picker5'.*removed"):
         await r.move(Pose.from_xyz(3, 0, 0.1))
 
 

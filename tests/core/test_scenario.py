@@ -664,11 +664,13 @@ def test_example_scenario_runs_headless(build, path):
     )
     if path.name == "warehouse.yaml":
         names = [o.name for o in sim.sim_objects]
-        # A named grid entry names its objects <name>_0, <name>_1, ... (three tote grids).
+        # A named grid entry names its objects <name>_0, <name>_1, ... (three tote grids, one
+        # name each: a scenario's names are unique).
         assert sum(n.startswith("shelf_") for n in names) == 9
         assert sorted(n for n in names if n.startswith("tote_")) == sorted(
-            f"tote_{k}" for k in range(4) for _ in range(3)
+            f"tote_A{rack}_{k}" for k in range(4) for rack in (1, 2, 3)
         )
+        assert len(names) == len(set(names))
         assert len(standby.objects) == 6
         assert sorted(n for n in names if n.startswith("patrol")) == ["patrol_0", "patrol_1"]
         pallet = next(o for o in sim.sim_objects if o.name == "pallet")

@@ -22,7 +22,7 @@ from fleet_async import (
 from fleet_async.core.view.trace import TraceWriter
 from fleet_async.core.view.trace.format import FORMAT_VERSION, HEADER, MAGIC, YAW_SCALE
 from fleet_async.core.view.trace.frames import HeadingTracker
-from fleet_async.viewer import TraceFormatError, TraceReader
+from fleet_async.viewer import TraceCutWarning, TraceFormatError, TraceReader
 from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.1], rgba_color=[0.2, 0.4, 0.9, 1.0])
@@ -279,9 +279,14 @@ def test_truncated_file_names_file_problem_and_version(small_trace, tmp_path):
     cut = tmp_path / "cut.fatrace"
     cut.write_bytes(data[: len(data) - 30])
     with pytest.raises(TraceFormatError) as err:
-        TraceReader(cut)
+        TraceReader(cut, strict=True)
     message = str(err.value)
     assert str(cut) in message and "truncated" in message and "versions 1 and 2" in message
+    # By default the readable prefix loads, with a warning (a killed run's trace).
+    with pytest.warns(TraceCutWarning, match=r"cut\.fatrace: truncated: record 4 \(END\)"):
+        prefix = TraceReader(cut)
+    assert prefix.frame_count == TraceReader(small_trace).frame_count and prefix.end is None
+    assert prefix.cut.startswith("truncated: record 4 (END) at byte")
     cut.write_bytes(data[:10])
     with pytest.raises(TraceFormatError, match="shorter than the 16-byte header"):
         TraceReader(cut)
@@ -294,7 +299,9 @@ def test_missing_end_record_is_unfinished(sim, tmp_path):
         sim.step_once()
     writer.flush()  # what the periodic flush of a long run leaves on disk
     with pytest.raises(TraceFormatError, match="no end record"):
-        TraceReader(tmp_path / "live.fatrace")
+        TraceReader(tmp_path / "live.fatrace", strict=True)
+    with pytest.warns(TraceCutWarning, match="no end record"):
+        assert TraceReader(tmp_path / "live.fatrace").frame_count >= 1
     assert TraceReader(tmp_path / "live.fatrace", allow_unfinished=True).frame_count >= 1
     sim.stop_trace()
 

@@ -78,3 +78,20 @@ def steps_only(seed: int, speed: float = 1.0):
 def not_a_sim(seed: int):
     """Returns something that is not a simulation."""
     return {"seed": seed}
+
+
+def walkers(seed: int, robots: int = 3):
+    """Robots on random walks: their controllers draw from their own streams (sim.rng_for)."""
+    sim = MultiRobotSimulationCore(
+        SimulationParams(gui=False, target_rtf=0.0, timestep=0.1, seed=seed, duration=10.0)
+    )
+    for i in range(robots):
+        Agent.from_mesh(
+            BOX,
+            BOX,
+            Pose.from_xyz(3.0 * i, 0.0, 0.1),
+            sim_core=sim,
+            name=f"w{i}",
+            controller=["omni", {"type": "random_walk", "radius": 4.0}],
+        )
+    return sim

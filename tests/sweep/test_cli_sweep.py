@@ -237,3 +237,28 @@ def test_runs_progress_bar_estimates_from_the_runs_it_ran():
     bar.failed = 1
     assert bar.update(30)  # 10 runs in 10 s: 70 left take 70 s
     assert stream.getvalue().endswith("30/100 runs  1 failed  ETA 70 s")
+
+
+class _Payload:
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self):
+        return (eval, (f"open({str(self.marker)!r}, 'w').write('pwned')",))
+
+
+def test_a_planted_pickle_checkpoint_runs_nothing_without_unsafe(scenario, tmp_path, capsys):
+    import pickle
+
+    marker, planted = tmp_path / "marker", tmp_path / "gift.ckpt"
+    planted.write_bytes(pickle.dumps(_Payload(marker)))
+    out = tmp_path / "b.csv"
+    args = ["sweep", str(scenario), "--checkpoint", str(planted), "--seeds", "0:2"]
+    code = main([*args, "--engine", "inline", "--out", str(out), "--quiet"])
+    assert code != 0 and not marker.exists()
+    rows = read_table(out)
+    assert all("gift.ckpt is a format-1 checkpoint, a pickle" in r["error"] for r in rows)
+    assert all("--unsafe" in r["error"] for r in rows)
+    out.unlink()
+    main([*args, "--engine", "inline", "--out", str(out), "--quiet", "--unsafe"])
+    assert marker.exists()  # what --unsafe means: the file's code runs

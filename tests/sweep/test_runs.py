@@ -191,3 +191,25 @@ def test_an_empty_scenario_file_is_refused_naming_it(tmp_path):
     path.write_text("")
     with pytest.raises(ValueError, match=r"empty.yaml: the file is empty"):
         YamlScenario.from_file(path)
+
+
+def test_seeds_branch_different_runs_from_one_checkpoint(tmp_path):
+    from tests.sweep.sweep_scenarios import walkers
+
+    warm = walkers(0)
+    for _ in range(30):
+        warm.step_once()
+    warm.save_state(tmp_path / "warm.ckpt")
+    warm.close()
+    scenario = FunctionScenario(ref("walkers"))
+    checkpoint = str(tmp_path / "warm.ckpt")
+
+    def branch(seed: int) -> dict:
+        result = execute_run(RunSpec(0, {}, seed, scenario, 5.0, False, checkpoint))
+        assert result.error is None
+        return result.kpis
+
+    runs = [branch(seed) for seed in (0, 1, 2)]
+    distances = [run["distance_total_m"] for run in runs]
+    assert len(set(distances)) == 3  # three seeds, three runs
+    assert branch(1) == runs[1]  # the same seed, the same run

@@ -4,7 +4,10 @@ A program is a few top-level scripts (lists of ops) over shared primitives: thre
 resources, two stores and a container. The same program runs
 
 - on fleet_async (``run_fleet``), on asyncio and on trio: their traces must be identical, with
-  no internal error, and at the end every slot free and every request queue empty;
+  no internal error, conservation after every event (no slot, amount or item lost or made
+  twice, under any interleaving of interrupts, cancels and timeouts), and at the end every
+  slot free and every request queue empty; cut into pieces (``run(until=t)`` suspending, the
+  next run continuing), the trace must be the one of the uncut run;
 - on SimPy (``run_simpy``), when it uses only what SimPy can express (``full=False``): its trace
   must equal fleet_async's, so a consistently wrong order cannot pass.
 
@@ -16,6 +19,7 @@ on. Time is in whole steps (dt = 1).
 from __future__ import annotations
 
 import sys
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -68,9 +72,14 @@ def _ops(depth: int, full: bool) -> st.SearchStrategy[Op]:
         st.tuples(st.just("interrupt"), st.integers(0, 3)),
     ]
     if full:
+        how = st.sampled_from(["interrupt", "cancel"])
         simple += [
             st.tuples(st.just("cancel"), st.integers(0, 3)),
             st.tuples(st.just("raise"), st.integers(0, 9)),
+            # put, then interrupt or cancel a mission as the put is processed: a get the put
+            # served is given up before its mission resumed (the conservation cases)
+            st.tuples(st.just("kick"), st.integers(0, 1), st.sampled_from(["a", "b"]), k, how),
+            st.tuples(st.just("tkick"), st.integers(1, 3), k, how),
         ]
     if depth < 2:
         sub = _script(depth + 1, full)
@@ -122,6 +131,42 @@ class _World:
         self.resources = [fa.Resource(sim, c) for c in program.capacities]
         self.stores = [fa.Store(sim, c) for c in program.store_capacities]
         self.tank = fa.Container(sim, *program.container)
+        self.puts: list[Any] = []  # every put request the missions made (stores and tank)
+        self.gets: list[Any] = []  # every get request, and whether its value was taken
+        self.taken: set[int] = set()
+
+    def check_conservation(self) -> None:
+        """After every event: each store holds exactly what was put in and not taken out
+        (counting what served gets hold for their missions and what waits to go back), the
+        tank's level likewise, and no resource has more users than slots."""
+        for queueing in [*self.stores, self.tank]:
+            tank = queueing is self.tank
+            put_in: Counter[Any] = Counter()
+            if tank:
+                put_in["amount"] += self.program.container[1]
+            for put in self.puts:
+                if put.owner is queueing and put.triggered and put.ok:
+                    put_in[put.amount if tank else put.item] += 1
+            held: Counter[Any] = Counter()
+            for get in self.gets:
+                if get.owner is queueing and get.triggered and get.ok:
+                    held[get.amount if tank else get.raw_value] += 1  # taken or still held
+            for back in queueing.put_queue:
+                if back.mission is None:  # what a withdrawn get took, waiting to go back
+                    held[back.amount if tank else back.item] += 1
+            if tank:
+                total_in = sum(k * v for k, v in put_in.items() if k != "amount")
+                total_in += put_in["amount"]
+                level = queueing.level + sum(k * v for k, v in held.items())
+                assert level == total_in, f"the tank holds {level}, {total_in} went in"
+            else:
+                assert Counter(queueing.items) + held == put_in, (
+                    f"store {self.stores.index(queueing)}: {queueing.items} + held {held} "
+                    f"!= put in {put_in}"
+                )
+        for n, resource in enumerate(self.resources):
+            assert resource.count <= resource.capacity, f"resource {n} over capacity"
+            assert not set(map(id, resource.users)) & set(map(id, resource.queue)), n
 
     def now(self) -> int:
         return int(self.sim.step_count - self.step0)
@@ -177,18 +222,26 @@ async def _fa_op(w: _World, name: str, i: int, op: Op) -> None:
                 w.note(name, i, "released")
     elif kind == "put":
         w.state[name] = "store"
-        await w.stores[op[1]].put(op[2])
+        put = w.stores[op[1]].put(op[2])
+        w.puts.append(put)
+        await put
         w.note(name, i, "put")
     elif kind == "get":
         w.state[name] = "store"
-        w.note(name, i, "got", await w.stores[op[1]].get())
+        get = w.stores[op[1]].get()
+        w.gets.append(get)
+        w.note(name, i, "got", await get)
     elif kind == "cput":
         w.state[name] = "store"
-        await w.tank.put(op[1])
+        put = w.tank.put(op[1])
+        w.puts.append(put)
+        await put
         w.note(name, i, "cput", w.tank.level)
     elif kind == "cget":
         w.state[name] = "store"
-        await w.tank.get(op[1])
+        get = w.tank.get(op[1])
+        w.gets.append(get)
+        await get
         w.note(name, i, "cget", w.tank.level)
     elif kind == "anyof":
         w.state[name] = "sleep"
@@ -227,7 +280,20 @@ async def _fa_op(w: _World, name: str, i: int, op: Op) -> None:
 
 async def _fa_full_op(w: _World, name: str, i: int, op: Op) -> None:
     sim, kind = w.sim, op[0]
-    if kind == "cancel":
+    if kind in ("kick", "tkick"):
+        # The put's processing serves a waiting get (scheduled after it at this step); this
+        # mission resumes in the same processing and kicks the getter before it resumes.
+        target, how = f"m{op[-2]}", op[-1]
+        put = w.stores[op[1]].put(op[2]) if kind == "kick" else w.tank.put(op[1])
+        w.puts.append(put)
+        w.state[name] = "store"
+        await put
+        handle = w.handles.get(target)
+        ok = handle is not None and handle.is_alive and target != name
+        if ok:
+            handle.interrupt(name) if how == "interrupt" else handle.cancel()
+        w.note(name, i, kind, target, how, ok)
+    elif kind == "cancel":
         handle = w.handles.get(f"m{op[1]}")
         ok = handle is not None and handle.is_alive and f"m{op[1]}" != name
         if ok:
@@ -275,24 +341,49 @@ async def _fa_nested(w: _World, name: str, i: int, ops: list[Op]) -> None:
         w.state[name] = "run"
 
 
-def run_fleet(sim: Any, program: Program, backend: str) -> tuple[list[tuple[Any, ...]], str]:
+def run_fleet(
+    sim: Any, program: Program, backend: str, cuts: tuple[int, ...] = ()
+) -> tuple[list[tuple[Any, ...]], str]:
     """Run ``program`` on fleet_async; return its trace and how the run ended.
 
+    Args:
+        sim: The simulation (reused across programs).
+        program: What to run.
+        backend: "asyncio" or "trio".
+        cuts: Steps (after the start, before ``program.until``) at which the run stops with
+            its missions suspended, to be continued by the next ``fleet_async.run``.
+
     Raises:
-        AssertionError: if a slot is still held or a request still queued at the end.
+        AssertionError: if conservation breaks after an event, or a slot is still held or a
+            request still queued at the end.
     """
     w = _World(sim, program, sim.step_count)
+    sim.mission_runtime.kernel.after_event = w.check_conservation
 
     async def main() -> None:
         for n, ops in enumerate(program.scripts):
             w.handles[f"m{n}"] = sim.spawn(_fa_script, w, f"m{n}", ops, name=f"m{n}")
 
-    until = sim.sim_time + program.until * sim.params.timestep
+    start, dt = sim.sim_time, sim.params.timestep
+    pieces = [*sorted(set(cuts)), program.until]
     try:
-        fa.run(sim, main, until=until, backend=backend, watchdog=10.0)
+        for k, end in enumerate(pieces):
+            last = k == len(pieces) - 1
+            runtime = sim.mission_runtime
+            if runtime is not None:
+                runtime.kernel.after_event = w.check_conservation
+            fa.run(
+                sim,
+                main if k == 0 else None,
+                until=start + end * dt,
+                then="cancel" if last else "suspend",
+                backend=backend,
+                watchdog=10.0,
+            )
         outcome = "ok"
     except (ValueError, BaseExceptionGroup) as error:
         outcome = f"{type(error).__name__}: {_leaves(error)}"
+    w.check_conservation()
     for n, resource in enumerate(w.resources):
         assert resource.count == 0, f"resource {n} still has users {resource.users}"
         assert not resource.queue, f"resource {n} still has requests queued"

@@ -365,7 +365,7 @@ def test_pacing_follows_target_rtf_and_serves_wakes_from_outside(backend, monkey
     """At target_rtf 2 the driver sleeps so that wall time is half the sim time (on a fake
     wall clock). What the outside world does during a pacing sleep (here: set a sim Event)
     takes effect before the next step."""
-    run_module = sys.modules["fleet_async.tasks.run"]  # the module, not the function
+    run_module = sys.modules["fleet_async.tasks.driver"]  # the module, not the function
     wall = {"now": 100.0}
     slept = []
     params = SimulationParams(gui=False, monitor=False, target_rtf=2.0, timestep=0.1)
@@ -417,7 +417,7 @@ def test_holding_the_clock_warns_once_naming_the_culprits(backend, monkeypatch):
     """A wall-clock wait inside a mission is allowed (it holds the clock) but gets one warning
     that names the mission and the sim-time replacements (the threshold, a second by default,
     is shortened here)."""
-    monkeypatch.setattr(sys.modules["fleet_async.tasks.run"], "_WARN_AFTER", 0.02)
+    monkeypatch.setattr(sys.modules["fleet_async.tasks.driver"], "_WARN_AFTER", 0.02)
     with _sim() as sim:
 
         async def main():

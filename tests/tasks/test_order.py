@@ -342,9 +342,33 @@ def test_until_stops_before_the_events_due_then_and_cleanup_runs_then(backend):
             finally:
                 log.append((sim.now, "cleanup"))
 
-        assert fa.run(sim, ticker, until=3.0, backend=backend) is None
+        assert fa.run(sim, ticker, until=3.0, then="cancel", backend=backend) is None
         assert log == [(1.0, "tick"), (2.0, "tick"), (3.0, "cleanup")]
         assert sim.sim_time == 3.0
+        assert sim.suspended_missions() == []
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_until_suspends_and_the_next_run_continues_the_same_missions(backend):
+    """SimPy's run(until=t): the missions stay where they wait; run(until=t2) goes on."""
+    with _sim(dt=1.0) as sim:
+        log = []
+
+        async def ticker():
+            try:
+                while True:
+                    await sim.sleep(1)
+                    log.append((sim.now, "tick"))
+            finally:
+                log.append((sim.now, "cleanup"))
+
+        assert fa.run(sim, ticker, until=3.0, backend=backend) is None
+        assert log == [(1.0, "tick"), (2.0, "tick")]  # the tick due at 3.0 waits for the next
+        assert sim.sim_time == 3.0 and sim.suspended_missions() == ["ticker"]
+        assert fa.run(sim, until=5.0, backend=backend) is None
+        assert log[2:] == [(3.0, "tick"), (4.0, "tick")]
+        sim.end_missions()
+        assert log[-1] == (5.0, "cleanup") and sim.suspended_missions() == []
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

@@ -427,7 +427,7 @@ def test_a_cancelled_library_future_is_the_missions_error_not_a_stop():
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_a_paced_run_lets_the_outside_world_set_an_event(backend, monkeypatch):
-    run_module = sys.modules["fleet_async.tasks.run"]
+    run_module = sys.modules["fleet_async.tasks.driver"]
     wall = {"now": 0.0}
 
     async def fake_sleep(seconds):
@@ -459,7 +459,7 @@ def test_a_paced_run_lets_the_outside_world_set_an_event(backend, monkeypatch):
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_a_paced_run_behind_real_time_still_lets_other_tasks_run(backend, monkeypatch):
-    run_module = sys.modules["fleet_async.tasks.run"]
+    run_module = sys.modules["fleet_async.tasks.driver"]
     wall = itertools.count(0.0, 100.0)  # every look at the wall: 100 s later, always behind
     monkeypatch.setattr(run_module, "_wall_clock", lambda: next(wall))
     monkeypatch.setattr(run_module, "_YIELD_EVERY", 0.0)
@@ -513,19 +513,29 @@ def test_a_sim_await_from_another_thread_says_so(backend):
         assert "another thread" in message and "anyio.from_thread" in message
 
 
-def test_misuse_outside_a_run_is_one_error_type():
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_awaiting_outside_a_mission_is_one_error_type_naming_the_call(backend):
+    """Made before a run is fine (SimPy builds models first); awaited outside a mission is an
+    error that names what was awaited, and an action awaited there does not drive on."""
     with _sim() as sim:
         robot = _robot(sim)
-        for use in (
-            lambda: sim.sleep(1),
-            lambda: robot.move(Pose.from_xyz(1, 0, 0.1)),
-            lambda: fa.Resource(sim).request(),
+        for make, name in (
+            (lambda: sim.sleep(1), "awaiting a sim event"),
+            (lambda: robot.move(Pose.from_xyz(1, 0, 0.1)), r"agent\.move\(\.\.\.\)"),
+            (lambda: fa.Resource(sim).request(), "awaiting a sim event"),
         ):
-            with pytest.raises(fa.NoMissionRuntimeError, match=r"fleet_async\.run"):
-                use()
+            event = make()
+
+            async def outside(event=event):
+                await event
+
+            with pytest.raises(fa.NoMissionRuntimeError, match=name):
+                anyio.run(outside, backend=backend)
+        assert not robot.is_moving and robot.get_current_action() is None
         flag = fa.Event(sim)
         flag.fail(KeyError("early"))  # like set(): fine before the run
-        assert flag.processed and not flag.ok
+        flag.defused = True  # nobody will wait on it
+        assert flag.triggered and not flag.ok
 
         def generator():
             yield 1

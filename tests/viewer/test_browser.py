@@ -102,9 +102,15 @@ def test_click_on_a_robot_selects_it_and_lists_its_actions(browser_page, serve, 
     page.wait_for_function(f"document.getElementById('app').dataset.selected === '{target}'")
     name = reader.bodies[target]["name"]
     assert name in page.inner_text("#sel-name")
+    # The timeline: each action a span naming its object and goal (completed ones say no
+    # status; the pick and the drop here completed).
     events = page.inner_text("#sel-events")
-    assert "PickAction started" in events and "PickAction completed" in events
-    assert "DropAction completed" in events
+    box = next(
+        b["name"] for b in reader.bodies.values() if b.get("pickable") and b["name"] in events
+    )
+    assert f"PickAction {box} at (" in events and f"DropAction {box} at (" in events
+    assert "failed" not in events and "cancelled" not in events
+    assert f"carrying {box}" in events
     # Clicking an event seeks the clock to it.
     page.click("#sel-events li >> nth=0")
     page.wait_for_function("Number(document.getElementById('app').dataset.simTime) < 0.5")
@@ -128,18 +134,30 @@ def test_height_filter_hides_bodies_outside_it(browser_page, serve, pick_drop_tr
     assert robot_pixel(page, reader, frame, robot)[0][3] == 255
 
 
-def test_truncated_trace_shows_an_error_naming_file_and_version(
+def test_a_cut_trace_shows_its_readable_prefix_and_a_bad_one_an_error(
     browser_page, serve, pick_drop_trace, tmp_path
 ):
     cut = tmp_path / "cut.fatrace"
     data = pick_drop_trace.read_bytes()
-    cut.write_bytes(data[: len(data) // 2])
+    cut.write_bytes(data[:-20])  # the end record cut short, as a killed run leaves it
     page = browser_page
+    page.goto(serve(cut).url)
+    page.wait_for_function(READY, timeout=60_000)
+    assert page.get_attribute("#app", "data-state") == "ready"
+    with pytest.warns(UserWarning, match="readable prefix"):
+        expected = TraceReader(cut).frame_count
+    assert page.evaluate("viewer.data.frames.length") == expected > 0
+    message = page.evaluate("viewer.data.cut")
+    assert "cut.fatrace" in message and "truncated" in message and "readable prefix" in message
+    bad = bytearray(data)
+    bad[24:28] = b"\xff\xff\xff\xff"  # the META record's payload is no longer JSON
+    cut.write_bytes(bytes(bad))
     page.goto(serve(cut).url)
     page.wait_for_function(READY, timeout=60_000)
     assert page.get_attribute("#app", "data-state") == "error"
     message = page.inner_text("#error")
-    assert "cut.fatrace" in message and "truncated" in message and "versions 1 and 2" in message
+    assert "cut.fatrace" in message and "record 0 (META) at byte 16" in message
+    assert "versions 1 and 2" in message
 
 
 def test_stacked_robots_get_a_count_and_devices_are_not_counted_as_robots(

@@ -6,10 +6,11 @@ and back out to the approach pose. A sub-move shorter than ``move_skip_threshold
 and so are all of them on a fixed-base agent (its goals are ignored). Only what differs lives
 in the subclasses: which object is the target, and what "act" does.
 
-With ``joint_targets`` or ``ee_target_position`` the act is done by an arm: the joints reach
-(the given targets, or an IK solution for the end-effector target), the object is attached to
-or detached from ``attach_link``, and the joints return to where they were (the lift). An arm
-whose base cannot move reaches from where it stands, without the drive stages.
+With ``joint_targets`` or ``ee_target_position`` (one of them, not both) the act is done by an
+arm: the joints reach (the given targets, or an IK solution for the end-effector target) and the
+object is attached to or detached from ``attach_link``. The arm stays where the reach took it,
+as in pybullet_fleet (queue a ``JointAction`` to fold it away). An arm whose base cannot move
+reaches from where it stands, without the drive stages.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from fleet_async.core.actions.action import (
     WaitHint,
 )
 from fleet_async.core.actions.arm_actions import format_position
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import DropPhase, MovementDirection, PickPhase
 from fleet_async.core.geometry.approach import calculate_offset_pose, find_nearest
 from fleet_async.core.geometry.pose import Pose
@@ -56,7 +58,8 @@ class _ApproachAction(TrackedAction):
         use_approach: Drive to the approach pose first.
         approach_pose: The approach pose; None computes it ``approach_offset`` short.
         approach_offset: m short of the target where the approach pose is.
-        joint_targets: Arm: joint positions to reach with (a list, or {joint name: position}).
+        joint_targets: Arm: joint positions to reach with (a list, or {joint name: position});
+            not together with ``ee_target_position``.
         joint_tolerance: Arm: rad (or m) within which a joint has arrived.
         joint_max_force: Arm: N (or N m) of the joint motors with physics.
         ee_target_position: Arm: [x, y, z] for the end effector, reached through IK.
@@ -81,7 +84,6 @@ class _ApproachAction(TrackedAction):
     _stages: deque[_Stage] | None
     _moving: bool
     _arm_targets: dict[int, float] | None
-    _arm_home: dict[int, float]
     joint_tolerance: Any
     joint_max_force: float
     ee_target_orientation: Any
@@ -98,6 +100,12 @@ class _ApproachAction(TrackedAction):
         if self.approach_pose is not None and not isinstance(self.approach_pose, Pose):
             raise ValueError(
                 f"{name}.approach_pose: expected a Pose or None, got {self.approach_pose!r}"
+            )
+        if self.joint_targets is not None and self.ee_target_position is not None:
+            raise ValueError(
+                f"{name}: give joint_targets or ee_target_position, not both (got "
+                f"joint_targets={short_repr(self.joint_targets)}, "
+                f"ee_target_position={short_repr(self.ee_target_position)})"
             )
 
     # subclass hooks ------------------------------------------------------------------------
@@ -138,15 +146,12 @@ class _ApproachAction(TrackedAction):
         if uses_arm:
             stages.append(("joints", self._reach_targets, act_phase))
         stages.append(("act", self._act, act_phase))
-        if uses_arm:
-            stages.append(("joints", self._home_targets, act_phase))
         if approach is not None:
             stages.append(("move", approach, phases["RETREATING"], MovementDirection.BACKWARD))
         return stages
 
     def _reach_targets(self, agent: ActingAgent) -> dict[int, float] | str:
         """Joint targets for the reach: the given ones, or an IK solution for the EE target."""
-        self._arm_home = {j: float(agent.joints.positions[j]) for j in agent.joints.movable_indices}
         if self.joint_targets is not None:
             return agent.joint_targets_map(self.joint_targets)
         solution = agent.ik_reach(
@@ -167,10 +172,6 @@ class _ApproachAction(TrackedAction):
                 message,
             )
         return dict(solution.targets)
-
-    def _home_targets(self, agent: ActingAgent) -> dict[int, float] | str:
-        """Lift: the joints go back to where they were before the reach."""
-        return dict(self._arm_home)
 
     def _run_joint_stage(self, agent: ActingAgent, stage: _Stage) -> bool | str:
         """Command (first call) and wait for one joint stage; True once the joints arrived."""
@@ -251,7 +252,6 @@ class _ApproachAction(TrackedAction):
         self._stages = None
         self._moving = False
         self._arm_targets = None
-        self._arm_home = {}
 
 
 def _resolve_body(agent: ActingAgent, body_id: Any) -> SimObject | None:
@@ -303,7 +303,6 @@ class PickAction(_ApproachAction):
     _stages: deque[_Stage] | None = field(default=None, init=False, repr=False)
     _moving: bool = field(default=False, init=False, repr=False)
     _arm_targets: dict[int, float] | None = field(default=None, init=False, repr=False)
-    _arm_home: dict[int, float] = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self._check_common()
@@ -411,7 +410,6 @@ class DropAction(_ApproachAction):
     _stages: deque[_Stage] | None = field(default=None, init=False, repr=False)
     _moving: bool = field(default=False, init=False, repr=False)
     _arm_targets: dict[int, float] | None = field(default=None, init=False, repr=False)
-    _arm_home: dict[int, float] = field(default_factory=dict, init=False, repr=False)
     _phases: ClassVar[type[Enum]] = DropPhase
     _in_offset_field: ClassVar[str] = "drop_offset"
     _verb: ClassVar[str] = "DROP"

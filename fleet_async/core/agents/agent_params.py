@@ -24,6 +24,9 @@ class AgentSpawnParams(SimObjectSpawnParams):
     agent (no geometry, no collision).
 
     Attributes:
+        mass: kg, as for any object (0.0: kinematic, every URDF link made massless); for a
+            URDF robot also None: the URDF's own link masses, ``Agent.from_urdf``'s default
+            (the agent's ``mass`` is then their total).
         urdf_path: URDF file or model name.
         motion_mode: Default base controller when ``controller`` names none (deprecated
             shortcut; prefer ``controller="omni"`` / ``"differential"``).
@@ -35,6 +38,9 @@ class AgentSpawnParams(SimObjectSpawnParams):
             its fields, or True for the defaults); None (the default) for none.
     """
 
+    # Widened for URDF robots only: shape-based and virtual agents are refused a None mass in
+    # _checked_mass, so the body-making code that reads SimObjectSpawnParams.mass gets a float.
+    mass: float | None = 0.0  # type: ignore[assignment]
     urdf_path: str | None = None
     motion_mode: MotionMode = MotionMode.DIFFERENTIAL
     use_fixed_base: bool = False
@@ -62,6 +68,17 @@ class AgentSpawnParams(SimObjectSpawnParams):
             raise ValueError(
                 f"AgentSpawnParams.plugins: expected a list of mappings, got {self.plugins!r}"
             )
+
+    def _keeps_own_masses(self) -> bool:
+        return self.kind == "urdf"
+
+    def _checked_mass(self) -> float:
+        if self.mass is None:
+            raise ValueError(
+                f"{type(self).__name__}.mass: None (keep a URDF's own masses) needs urdf_path; "
+                f"this {self.kind} agent has none: give a mass in kg (0.0: kinematic)"
+            )
+        return super()._checked_mass()
 
     @classmethod
     def from_dict(cls, config: dict[str, Any], *, source: str | None = None) -> AgentSpawnParams:

@@ -9,8 +9,9 @@ __all__ = ["AttributeState"]
 
 class AttributeState:
     """``get_state`` / ``set_state`` for ``sim.save_state``: the object's attributes (objects
-    of the simulation are saved by id). Override both methods if some attribute cannot be
-    pickled or must not be restored."""
+    of the simulation are saved by id, random streams by key). A checkpoint holds plain data only
+    (numbers, strings, lists, dicts, numpy arrays): override both methods if some attribute is
+    not (a function, a lock, an instance of your own class) or must not be restored."""
 
     def get_state(self) -> dict[str, Any]:
         """What ``sim.save_state`` keeps of this object: its attributes."""

@@ -22,7 +22,9 @@ from typing import Any, TypeVar
 
 import yaml
 
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import coerce_enum
+from fleet_async.core.base.yaml_scalars import ScalarRuleLoader
 
 __all__ = [
     "dataclass_from_dict",
@@ -65,7 +67,7 @@ def load_yaml_config(config_path: PathLike, *, allow_empty: bool = True) -> dict
         raise FileNotFoundError(f"Config file not found: {path} (looked for {path.resolve()})")
     try:
         with path.open(encoding="utf-8") as stream:
-            data = yaml.safe_load(stream)
+            data = yaml.load(stream, Loader=ScalarRuleLoader)  # data only, one scalar rule
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         problem = getattr(exc, "problem", None) or str(exc)
@@ -216,7 +218,7 @@ def dataclass_from_dict(
     where = _where(source)
     label = section or cls.__name__
     if not isinstance(config, Mapping):
-        raise ValueError(f"{where}{label}: expected a mapping, got {config!r}")
+        raise ValueError(f"{where}{label}: expected a mapping, got {short_repr(config)}")
     aliases, converters = aliases or {}, converters or {}
     init_fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     selected = list(init_fields) if strict_keys is None else list(strict_keys)
@@ -400,7 +402,7 @@ def _mismatch(value: Any, hint: Any, path: str, source: PathLike | None) -> Any:
             note = " (YAML 1.1 reads 1e-3 as a string; write 1.0e-3)"
         except ValueError:
             pass
-    got = f"{value!r} ({type(value).__name__})"
+    got = f"{short_repr(value)} ({type(value).__name__})"
     raise ValueError(f"{_where(source)}{path}: expected {expected}, got {got}{note}")
 
 

@@ -70,7 +70,10 @@ class SimulationParams:
             and go) or "constant" (``spatial_hash_cell_size``).
         spatial_hash_cell_size: Cell size in metres for the "constant" mode.
         collision_detection_method: Narrow phase: "closest_points", "contact_points" or
-            "hybrid"; None picks by physics (contacts with physics on, distances without).
+            "hybrid"; None picks by ``physics`` when the params are made (contacts with physics
+            on, distances without) and the field then holds the method picked, as
+            pybullet_fleet's does. ``dataclasses.replace(params, physics=...)`` keeps that
+            method: pass ``collision_detection_method=None`` with it to pick again.
         collision_margin: Metres: closer than this counts as touching (closest-points method).
         multi_cell_threshold: Objects larger than this many cells are hashed into every cell
             they cover instead of one.
@@ -94,6 +97,10 @@ class SimulationParams:
             positions at the two checks; its orientation is the one at the check). Catches a
             fast robot passing through another within one step; off by default (it costs a
             swept broad phase; see docs/performance.md).
+        memory_share: The share of this machine's physical memory a spawn may plan to use
+            (> 0; default 0.5). A grid or a scenario whose bodies would need more is refused
+            before anything is built, saying how much it needs (at least 16 KiB a body; a
+            mobile robot from a URDF takes about 100 KiB). Raise it (e.g. 0.9) to allow more.
     """
 
     target_rtf: float = 1.0
@@ -133,6 +140,7 @@ class SimulationParams:
     seed: int = 0
     sync_pybullet_every_step: bool = False
     collision_sweep: bool = False
+    memory_share: float = 0.5
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(
@@ -148,6 +156,7 @@ class SimulationParams:
             )
         self._validate_numbers()
         self._validate_flags()
+        self.collision_detection_method = self.resolved_collision_detection_method
         level = self.log_level.lower() if isinstance(self.log_level, str) else self.log_level
         _require(level in LOG_LEVELS, "log_level", self.log_level, f"one of {LOG_LEVELS}")
         self.log_level = level
@@ -184,6 +193,12 @@ class SimulationParams:
             "duration",
             self.duration,
             "a finite number >= 0 (0: run until interrupted)",
+        )
+        _require(
+            num(self.memory_share) and self.memory_share > 0,
+            "memory_share",
+            self.memory_share,
+            "a number > 0 (the share of physical memory a spawn may plan to use)",
         )
         freq = self.collision_check_frequency
         _require(
@@ -246,7 +261,8 @@ class SimulationParams:
 
     @property
     def resolved_collision_detection_method(self) -> CollisionDetectionMethod:
-        """The narrow-phase method in force: the explicit one, else by ``physics``."""
+        """The narrow-phase method in force: ``collision_detection_method``, else (if it was
+        set to None after the params were made) the one ``physics`` picks."""
         if self.collision_detection_method is not None:
             return self.collision_detection_method
         if self.physics:

@@ -75,17 +75,10 @@ class SimObjectSpawnParams:
             if self.initial_pose is None:
                 raise ValueError(f"{cls_name}.initial_pose: expected a Pose, got None")
         mass = self.mass
-        if type(mass) is not float or not (0.0 <= mass < math.inf):
-            if (
-                isinstance(mass, bool)
-                or not isinstance(mass, (int, float))
-                or not math.isfinite(mass)
-                or mass < 0
-            ):
-                raise ValueError(
-                    f"{cls_name}.mass: expected a finite number >= 0 (kg), got {mass!r}"
-                )
-            self.mass = float(mass)
+        if (type(mass) is not float or not (0.0 <= mass < math.inf)) and (
+            mass is not None or not self._keeps_own_masses()
+        ):
+            self.mass = self._checked_mass()
         if type(self.collision_mode) is not CollisionMode:
             self.collision_mode = coerce_enum(
                 CollisionMode, self.collision_mode, f"{cls_name}.collision_mode"
@@ -94,6 +87,24 @@ class SimObjectSpawnParams:
             raise ValueError(f"{cls_name}.name: expected a string or None, got {self.name!r}")
         if type(self.user_data) is not dict and not isinstance(self.user_data, dict):
             raise ValueError(f"{cls_name}.user_data: expected a mapping, got {self.user_data!r}")
+
+    def _keeps_own_masses(self) -> bool:
+        """Whether ``mass=None`` is allowed: the body's file gives the masses (not here)."""
+        return False
+
+    def _checked_mass(self) -> float:
+        """``mass`` as a float, or a ValueError naming it (the slow path of the check)."""
+        mass = self.mass
+        if (
+            isinstance(mass, bool)
+            or not isinstance(mass, (int, float))
+            or not math.isfinite(mass)
+            or mass < 0
+        ):
+            raise ValueError(
+                f"{type(self).__name__}.mass: expected a finite number >= 0 (kg), got {mass!r}"
+            )
+        return float(mass)
 
     @classmethod
     def from_dict(

@@ -6,7 +6,8 @@ brings it to that state, and from there the two continue step for step identical
 poses, same events, same random numbers). A sweep can so branch many runs from one warmed-up
 state (``fleet-async sweep --checkpoint``).
 
-Saved: the clock (step count, collisions so far, paused); the random generator; every
+Saved: the clock (step count, collisions so far, paused); the random generator and every random
+stream (``sim.rng_for``); every
 object's pose, velocity, angular velocity, collision mode, name and "moved since the last
 collision check" flag; attachments; the kinematic engine (paths in progress, segment
 progress, velocity commands); every action queue (queued and running actions with their
@@ -30,11 +31,18 @@ Not saved, and refused where it matters:
 - the KPI collector, recordings, the GUI and the monitor.
 
 Restoring checks that the target was built the same way (the same objects, of the same types,
-with the same ids, controllers and plugins, the same timestep) and has not stepped yet; it
-refuses otherwise, naming the difference. The file is a pickle: load only checkpoints you
-trust.
+with the same ids, controllers and plugins, the same timestep) and has not stepped yet, and
+checks the whole state against it before changing anything; it refuses otherwise, naming the
+difference, and the simulation is left as it was.
+
+The file holds plain data only (format 2): reading one runs no code from it. Controller and
+plugin state must be plain data (``save_state`` names the one that is not). Format-1 files were
+pickles; they are read only with ``restore_state(path, unsafe=True)``.
 
 ``api.py`` is the simulation's side (``save_state`` / ``restore_state``), ``format.py`` the file
-(a header, then the state, pickled with objects by id), ``saving.py`` and ``restoring.py`` the
-two directions. May import ``sim`` and below; never ``metrics`` (its floor-mate).
+(an npz of a JSON header, a JSON state and arrays), ``codec.py`` the state tree as plain data,
+``references.py`` the simulation's objects and random streams by id and key, ``saving.py`` and
+``restoring.py`` the two directions (``validation.py`` the checks before a restore changes
+anything), ``legacy.py`` format 1. May import ``sim`` and below; never ``metrics`` (its
+floor-mate).
 """

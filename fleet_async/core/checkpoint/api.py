@@ -52,16 +52,25 @@ class CheckpointApi:
         """
         save(cast("SimulationKernel", self), path, self._checkpoint_parts())
 
-    def restore_state(self, path: str | os.PathLike[str]) -> None:
+    def restore_state(self, path: str | os.PathLike[str], *, unsafe: bool = False) -> None:
         """Bring this simulation, freshly built from the scenario a checkpoint was saved from
         and not stepped yet, to the state ``save_state`` wrote to ``path``.
 
+        Everything is checked before anything changes: a refused checkpoint leaves the
+        simulation as it was. Reading a checkpoint runs no code from it.
+
+        Args:
+            path: The checkpoint file.
+            unsafe: Also read a format-1 checkpoint, a pickle, which runs any code it names:
+                only for a file whose maker you trust (then save it again, in format 2).
+
         Raises:
             CheckpointError: for a simulation built differently or already stepped, naming
-                the difference; for a file that is no checkpoint.
+                the difference; for a file that is no checkpoint or a pickle without
+                ``unsafe``, naming the file.
         """
         sim = cast("SimulationKernel", self)
-        clock = restore(sim, path, self._checkpoint_parts())
+        clock = restore(sim, path, self._checkpoint_parts(), unsafe)
         self._step_count, self._collision_count, self._paused = clock
         self._initialized = True  # step_once must not zero the restored clock
 

@@ -9,22 +9,25 @@ the random generator get their saved state back through ``set_state()``.
 
 from __future__ import annotations
 
-import io
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from fleet_async.core.checkpoint.codec import CodecError, decode
 from fleet_async.core.checkpoint.format import (
-    FORMAT,
     ROW_COLUMNS,
-    VERSION,
     CheckpointError,
     CheckpointParts,
-    StateUnpickler,
+    is_pickle,
+    read_file,
     type_name,
 )
+from fleet_async.core.checkpoint.legacy import read_pickle
+from fleet_async.core.checkpoint.references import resolver_for
+from fleet_async.core.checkpoint.saving import collect
+from fleet_async.core.checkpoint.validation import validate
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -33,29 +36,30 @@ if TYPE_CHECKING:
 __all__ = ["restore"]
 
 
-def _load(sim: SimulationKernel, path: str | os.PathLike[str], step_count: int) -> dict[str, Any]:
+def _load(
+    sim: SimulationKernel, path: str | os.PathLike[str], step_count: int, unsafe: bool
+) -> dict[str, Any]:
     """The checkpoint's state, once its header shows that ``sim`` can take it."""
-    unpickler = StateUnpickler(io.BytesIO(Path(path).read_bytes()), sim)
+    data = Path(path).read_bytes()
+    if is_pickle(data):
+        if not unsafe:
+            raise CheckpointError(
+                f"restore_state: {path} is a format-1 checkpoint, a pickle: reading it would run "
+                "any code it names, so it is refused. Only if you trust whoever made it, restore "
+                "it with restore_state(path, unsafe=True) (fleet-async sweep --unsafe) and save "
+                "it again: new checkpoints hold plain data only"
+            )
+        header, legacy_state = read_pickle(sim, path, data)
+        _check_target(sim, header, step_count)
+        return legacy_state
+    file = read_file(path, data)
+    _check_target(sim, file.header, step_count)
     try:
-        header = unpickler.load()
-    except Exception as exc:
-        raise CheckpointError(
-            f"restore_state: {path} is not a readable checkpoint ({exc})"
-        ) from exc
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        raise CheckpointError(f"restore_state: {path} is not a fleet_async checkpoint")
-    if header["version"] != VERSION:
-        raise CheckpointError(
-            f"restore_state: {path} has checkpoint format {header['version']}; this "
-            f"fleet_async reads format {VERSION}"
-        )
-    _check_target(sim, header, step_count)
-    try:
-        state: dict[str, Any] = unpickler.load()
-    except CheckpointError:
-        raise
-    except Exception as exc:
-        raise CheckpointError(f"restore_state: {path} is cut short or damaged ({exc})") from exc
+        state = decode(file.document, file.arrays, resolver_for(sim))
+    except (CodecError, RecursionError) as exc:
+        raise CheckpointError(f"restore_state: {path} is damaged ({exc})") from exc
+    if not isinstance(state, dict):
+        raise CheckpointError(f"restore_state: {path} is damaged (the state is not a dict)")
     return state
 
 
@@ -63,20 +67,26 @@ def _check_target(sim: SimulationKernel, header: dict[str, Any], step_count: int
     where = "restore_state"
     if sim.params.physics:
         raise CheckpointError(f"{where}: physics=True: checkpoints cover kinematic simulations")
-    if sim.mission_runtime is not None:
-        raise CheckpointError(f"{where}: missions are running; restore before fleet_async.run")
+    runtime = sim.mission_runtime
+    if runtime is not None and (runtime.driving or sim.suspended_missions()):
+        raise CheckpointError(
+            f"{where}: missions are running or suspended ({sim.suspended_missions()}); restore "
+            "before fleet_async.run, or end them with sim.end_missions() first"
+        )
     if step_count != 0:
         raise CheckpointError(
             f"{where}: this simulation has run {step_count} steps; restore into one freshly "
             "built from the scenario the checkpoint was saved from"
         )
-    if header["timestep"] != sim.params.timestep:
+    if header.get("timestep") != sim.params.timestep:
         raise CheckpointError(
             f"{where}: the checkpoint's timestep is {header['timestep']} s, this simulation's "
             f"{sim.params.timestep} s"
         )
     here = [(obj.object_id, type_name(obj)) for obj in sim.sim_objects]
-    there = [tuple(entry) for entry in header["objects"]]
+    objects = header.get("objects")
+    objects = objects if isinstance(objects, (list, tuple)) else []
+    there = [tuple(e) for e in objects if isinstance(e, (list, tuple))]
     if here != there:
         diff = next(
             (
@@ -147,19 +157,7 @@ def _restore_agents(sim: SimulationKernel, state: dict[str, Any], parts: Checkpo
         parts.joint_motion.activate(agent, agent.joints)
 
 
-def restore(
-    sim: SimulationKernel, path: str | os.PathLike[str], parts: CheckpointParts
-) -> tuple[int, int, bool]:
-    """Bring ``sim`` (freshly built from the same scenario) to the state saved in ``path``.
-
-    Returns:
-        (step count, collision count, paused) for the simulation's clock.
-
-    Raises:
-        CheckpointError: for a file that is no checkpoint, or a simulation that differs from
-            the saved one or has stepped already, naming the difference.
-    """
-    state = _load(sim, path, parts.step_count)
+def _apply(sim: SimulationKernel, state: dict[str, Any], parts: CheckpointParts) -> None:
     _restore_typed("the simulation's plugins", sim.plugins, state["plugins"])
     try:
         parts.callbacks.set_state(state["callbacks"])
@@ -170,5 +168,38 @@ def restore(
     _restore_agents(sim, state, parts)
     parts.collision.set_state(state["collision"])
     sim.rng.bit_generator.state = state["rng"]
+    if "streams" in state:  # format 1 had none
+        sim.random_streams.set_state(state["streams"])
+
+
+def restore(
+    sim: SimulationKernel, path: str | os.PathLike[str], parts: CheckpointParts, unsafe: bool
+) -> tuple[int, int, bool]:
+    """Bring ``sim`` (freshly built from the same scenario) to the state saved in ``path``.
+
+    Everything is checked before anything changes (``validation.py``); should a part still
+    refuse while the state is applied, the simulation is set back to a snapshot taken first.
+
+    Returns:
+        (step count, collision count, paused) for the simulation's clock.
+
+    Raises:
+        CheckpointError: for a file that is no checkpoint (or a format-1 pickle without
+            ``unsafe``), or a simulation that differs from the saved one or has stepped
+            already, naming the difference.
+    """
+    state = _load(sim, path, parts.step_count, unsafe)
+    validate(sim, state, parts)
+    snapshot = collect(sim, parts)
+    try:
+        _apply(sim, state, parts)
+    except Exception as exc:
+        _apply(sim, snapshot, parts)
+        if isinstance(exc, CheckpointError):
+            raise
+        raise CheckpointError(
+            f"restore_state: {path} does not fit this simulation ({type(exc).__name__}: {exc}); "
+            "the simulation is unchanged"
+        ) from exc
     step_count, collision_count, paused = state["clock"]
     return step_count, collision_count, paused

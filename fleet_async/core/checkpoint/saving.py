@@ -8,30 +8,29 @@ every object are copied here. What is saved and what is refused is listed in
 
 from __future__ import annotations
 
-import io
 import os
-import pickle
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from fleet_async.core.checkpoint.codec import CodecError, encode
 from fleet_async.core.checkpoint.format import (
     FORMAT,
     ROW_COLUMNS,
     VERSION,
     CheckpointError,
     CheckpointParts,
-    StatePickler,
     type_name,
     typed_states,
+    write_file,
 )
+from fleet_async.core.checkpoint.references import resolver_for
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.sim.kernel import SimulationKernel
 
-__all__ = ["save"]
+__all__ = ["collect", "save"]
 
 
 def _refuse_unsaveable(sim: SimulationKernel, parts: CheckpointParts) -> None:
@@ -40,10 +39,18 @@ def _refuse_unsaveable(sim: SimulationKernel, parts: CheckpointParts) -> None:
             "save_state: physics=True: PyBullet's dynamic state is not captured; checkpoints "
             "cover kinematic simulations (physics=False)"
         )
-    if sim.mission_runtime is not None:
+    runtime = sim.mission_runtime
+    if runtime is not None and runtime.driving:
         raise CheckpointError(
             "save_state: missions are running (fleet_async.run in progress), and a mission "
             "waiting mid-await cannot be saved; save before fleet_async.run or after it returns"
+        )
+    waiting = sim.suspended_missions()
+    if waiting:
+        raise CheckpointError(
+            f"save_state: missions {waiting} wait mid-await (a run stopped at until= left "
+            "them suspended), and a mission's place in its code cannot be saved; continue them "
+            "with fleet_async.run(sim, until=...) or end them with sim.end_missions() first"
         )
     if sim.in_step:
         raise CheckpointError("save_state: not inside step_once; save between steps")
@@ -78,7 +85,8 @@ def _header(sim: SimulationKernel) -> dict[str, Any]:
     }
 
 
-def _collect(sim: SimulationKernel, parts: CheckpointParts) -> dict[str, Any]:
+def collect(sim: SimulationKernel, parts: CheckpointParts) -> dict[str, Any]:
+    """The state tree of ``sim`` (what a checkpoint holds, before encoding)."""
     store = sim.state
     objects = sim.sim_objects
     rows = np.array([obj.state_row for obj in objects], dtype=np.int64)
@@ -102,7 +110,32 @@ def _collect(sim: SimulationKernel, parts: CheckpointParts) -> dict[str, Any]:
         "plugin_schedule": parts.plugin_schedule.get_state(),
         "plugins": typed_states(sim.plugins),
         "collision": parts.collision.get_state(),
+        "streams": sim.random_streams.get_state(),
     }
+
+
+def _holders(sim: SimulationKernel) -> list[tuple[str, object]]:
+    """Every user-extensible piece of state, with the name an error gives it."""
+    holders: list[tuple[str, object]] = [
+        (f"simulation plugin {type_name(p)}", p) for p in sim.plugins
+    ]
+    for agent in cast("list[Agent]", list(sim.agents)):
+        holders += [(f"{agent!r}: controller {type_name(c)}", c) for c in agent.controllers]
+        holders += [(f"{agent!r}: plugin {type_name(p)}", p) for p in agent.plugins]
+    return holders
+
+
+def _refuse_non_plain(sim: SimulationKernel) -> None:
+    """Name the first controller or plugin whose ``get_state()`` is not plain data."""
+    resolver = resolver_for(sim)
+    for label, holder in _holders(sim):
+        try:
+            encode(holder.get_state(), resolver, label)  # type: ignore[attr-defined]
+        except (CodecError, ValueError) as exc:
+            raise CheckpointError(
+                f"save_state: {exc}; a checkpoint holds numbers, strings, arrays, lists and "
+                "dicts only: give it get_state / set_state methods that return and take such data"
+            ) from exc
 
 
 def save(sim: SimulationKernel, path: str | os.PathLike[str], parts: CheckpointParts) -> None:
@@ -111,20 +144,13 @@ def save(sim: SimulationKernel, path: str | os.PathLike[str], parts: CheckpointP
 
     Raises:
         CheckpointError: for a simulation that cannot be saved (physics, running missions,
-            added motion systems such as the devices', per-object callbacks, state that cannot
-            be pickled), naming why.
+            added motion systems such as the devices', per-object callbacks, controller or
+            plugin state that is not plain data), naming why.
     """
     _refuse_unsaveable(sim, parts)
-    buffer = io.BytesIO()
+    _refuse_non_plain(sim)
     try:
-        pickler = StatePickler(buffer, sim)
-        pickler.dump(_header(sim))
-        pickler.dump(_collect(sim, parts))
-    except (pickle.PicklingError, TypeError, AttributeError) as exc:
-        raise CheckpointError(
-            f"save_state: some state cannot be saved ({exc}); give the controller or plugin "
-            "that holds it get_state / set_state methods"
-        ) from exc
-    tmp = Path(f"{os.fspath(path)}.tmp")
-    tmp.write_bytes(buffer.getvalue())
-    os.replace(tmp, path)
+        document, arrays = encode(collect(sim, parts), resolver_for(sim))
+    except (CodecError, ValueError) as exc:
+        raise CheckpointError(f"save_state: some state is not plain data ({exc})") from exc
+    write_file(path, _header(sim), document, arrays)

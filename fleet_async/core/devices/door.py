@@ -228,13 +228,15 @@ class Door(Device):
 
     # ----- commands -----------------------------------------------------------------------
 
-    def open(self) -> Any:
-        """Queue opening; return the event to ``await`` (ends when fully open)."""
-        return self.submit(DoorAction(opening=True))
+    def open(self, *, detached: bool = False) -> Any:
+        """Queue opening; return the event to ``await`` (ends when fully open).
+        ``detached``: it goes on even if the mission that asked ends first."""
+        return self.submit(DoorAction(opening=True), detached=detached, what="door.open")
 
-    def close(self) -> Any:
-        """Queue closing; return the event to ``await`` (ends when fully closed)."""
-        return self.submit(DoorAction(opening=False))
+    def close(self, *, detached: bool = False) -> Any:
+        """Queue closing; return the event to ``await`` (ends when fully closed).
+        ``detached``: it goes on even if the mission that asked ends first."""
+        return self.submit(DoorAction(opening=False), detached=detached, what="door.close")
 
     def request_open(self) -> None:
         """Open now: drop what the door was doing or had queued (no-op if open or opening)."""

@@ -116,15 +116,23 @@ class GridSpawnParams:
             * (self.z_max - self.z_min + 1)
         )
 
-    def cell_positions(self) -> np.ndarray:
-        """World positions of every cell, shape ``(total_cells, 3)``, X fastest then Y then Z."""
-        iz, iy, ix = np.meshgrid(
-            np.arange(self.z_min, self.z_max + 1),
-            np.arange(self.y_min, self.y_max + 1),
-            np.arange(self.x_min, self.x_max + 1),
-            indexing="ij",
-        )
-        index = np.stack([ix.ravel(), iy.ravel(), iz.ravel()], axis=1).astype(float)
+    def cell_positions(self, cells: np.ndarray | None = None) -> np.ndarray:
+        """World positions of ``cells`` (indices in X-fastest, then Y, then Z order; every
+        cell when None), shape ``(len(cells), 3)``. The work and memory follow the cells
+        asked for, not the grid's size."""
+        if cells is None:
+            cells = np.arange(self.total_cells)
+        cells = np.asarray(cells, dtype=np.int64)
+        nx = self.x_max - self.x_min + 1
+        ny = self.y_max - self.y_min + 1
+        index = np.stack(
+            [
+                cells % nx + self.x_min,
+                (cells // nx) % ny + self.y_min,
+                cells // (nx * ny) + self.z_min,
+            ],
+            axis=1,
+        ).astype(float)
         return np.asarray(self.offset) + index * np.asarray(self.spacing)
 
     @classmethod

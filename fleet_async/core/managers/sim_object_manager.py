@@ -26,6 +26,7 @@ import numpy as np
 
 from fleet_async.core.agents.agent import Agent
 from fleet_async.core.base.config_utils import load_yaml_config, register_class
+from fleet_async.core.base.memory import check_spawn_fits
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.geometry.pose import Pose
@@ -402,17 +403,18 @@ class SimObjectManager(Generic[T]):
         what: str,
         name_prefix: str | None = None,
     ) -> list[T]:
-        """Spawn ``params[kinds[k]]`` at cell ``cells[k]``, keeping each type's orientation
-        (named ``<name_prefix>_<k>`` when a prefix is given)."""
-        positions = grid.cell_positions()
+        """Spawn ``params[kinds[k]]`` at ``cells[k]`` in its orientation (``<name_prefix>_<k>``)."""
+        if self.sim_core is not None:
+            check_spawn_fits(len(cells), self.sim_core.params.memory_share, what)
+        positions = grid.cell_positions(cells)
         prepared = [self._prepare_params(prm) for prm in params]
         placed = [
             dataclasses.replace(
                 prepared[kind],
-                initial_pose=Pose(positions[cell], prepared[kind].initial_pose.orientation),
+                initial_pose=Pose(positions[k], prepared[kind].initial_pose.orientation),
                 **({} if name_prefix is None else {"name": f"{name_prefix}_{k}"}),
             )
-            for k, (cell, kind) in enumerate(zip(cells.tolist(), kinds.tolist(), strict=True))
+            for k, kind in enumerate(kinds.tolist())
         ]
         return self._spawn_params(placed, what)
 

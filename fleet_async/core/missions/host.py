@@ -36,10 +36,15 @@ __all__ = [
 
 
 class MissionHost(Protocol):
-    """The simulation, as a mission command sees it: the runtime ``fleet_async.run`` installed."""
+    """The simulation, as a mission command sees it: its mission runtime."""
 
     @property
     def mission_runtime(self) -> MissionRuntime | None: ...
+
+    def ensure_mission_runtime(self) -> MissionRuntime: ...
+
+    @property
+    def params(self) -> SimulationParams: ...
 
 
 class MissionAgent(Protocol):
@@ -77,6 +82,10 @@ class MissionSim(MissionHost, Protocol):
 
     def step_once(self) -> object: ...
 
+    def idle_steps(self, limit: int) -> int: ...
+
+    def seed_sequence(self, *key: Any) -> Any: ...
+
     def skip_idle_steps(self, limit: int) -> int: ...
 
     def set_mission_runtime(self, runtime: MissionRuntime | None) -> None: ...
@@ -94,9 +103,9 @@ class MissionDevice(Protocol):
 class MissionDoor(MissionDevice, Protocol):
     """A door, as ``door.pass_through`` uses it: its commands return the events to await."""
 
-    def open(self) -> Any: ...
+    def open(self, *, detached: bool = ...) -> Any: ...
 
-    def close(self) -> Any: ...
+    def close(self, *, detached: bool = ...) -> Any: ...
 
 
 class MissionElevator(MissionDevice, Protocol):

@@ -1,8 +1,11 @@
 """The sim-time awaitables the simulation offers to async missions.
 
-The mission runtime lives in ``fleet_async.tasks``; the core never imports it. A running
-``fleet_async.run`` installs its runtime with ``sim.set_mission_runtime`` and these methods
-delegate to it. Outside a run they raise a clear error.
+The mission runtime lives in ``fleet_async.tasks``; the core never imports it. The first
+mission call on a simulation makes its runtime (through the mission layer's hook) and installs
+it with ``sim.set_mission_runtime``; these methods delegate to it. The runtime outlives a run
+that stops at ``until`` with missions still waiting, so the next ``fleet_async.run`` continues
+them, and things made before a run (timers, events, requests, missions) start when it starts
+(SimPy's model). ``sim.end_missions()`` ends what is left.
 
 Most of these return an *event* rather than being coroutines: ``sim.sleep(2.0)`` schedules a
 timer when it is called (SimPy's ``env.timeout``), and ``await`` waits for it. Events compose:
@@ -19,7 +22,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING, Any, Protocol
 
 from fleet_async.core.base.events import EventBus
-from fleet_async.core.missions.errors import NoMissionRuntimeError
+from fleet_async.core.missions.hooks import mission_hook
 
 if TYPE_CHECKING:
     from fleet_async.core.actions.action import Action
@@ -30,12 +33,16 @@ __all__ = ["MissionRuntime", "SimEventBus", "SimMissionApi"]
 class MissionRuntime(Protocol):
     """What the core needs from a mission runtime (``fleet_async.tasks.runtime.Runtime``)."""
 
+    driving: bool
+
     def timeout(self, seconds: float, value: Any = ..., what: str = ...) -> Any: ...
     def sleep_until(self, t: float) -> Any: ...
     def scope(
         self, seconds: float | None, fail: bool, shield: bool = ..., absolute: bool = ...
     ) -> Any: ...
-    def wait_action(self, agent: Any, action: Action) -> Any: ...
+    def wait_action(
+        self, agent: Any, action: Action, detached: bool = ..., what: str = ...
+    ) -> Any: ...
     def wait_until(self, predicate: Callable[[], bool]) -> Any: ...
     def wait_event(self, name: str, where: Callable[..., bool] | None) -> Any: ...
     def event_stream(self, name: str, where: Callable[..., bool] | None) -> Any: ...
@@ -48,13 +55,9 @@ class MissionRuntime(Protocol):
     def event(self) -> Any: ...
     def current_mission(self, what: str) -> Any: ...
     def mission_rng(self) -> Any: ...
-
-
-def _no_runtime(what: str) -> NoMissionRuntimeError:
-    return NoMissionRuntimeError(
-        f"{what} needs a running mission: start missions with fleet_async.run(sim, main) "
-        "(or await fleet_async.run_async(sim, main) inside an event loop)"
-    )
+    def touch(self) -> None: ...
+    def mission_names(self) -> list[str]: ...
+    def end(self) -> None: ...
 
 
 def _events(events: tuple[Any, ...]) -> Iterable[Any]:
@@ -71,21 +74,56 @@ class SimMissionApi:
 
     def set_mission_runtime(self, runtime: MissionRuntime | None) -> None:
         """Install (or remove, with None) the runtime that serves sim-time awaits."""
-        if runtime is not None and self._mission_runtime is not None:
-            raise RuntimeError(
-                "this simulation already runs missions (one fleet_async.run at a time)"
-            )
+        if runtime is not None and self._mission_runtime not in (None, runtime):
+            raise RuntimeError("this simulation has a mission runtime already")
         self._mission_runtime = runtime
 
     @property
     def mission_runtime(self) -> MissionRuntime | None:
-        """The runtime of the ``fleet_async.run`` in progress, or None."""
+        """The simulation's mission runtime, or None before the first mission call (and
+        after ``end_missions()``)."""
         return self._mission_runtime
 
+    def ensure_mission_runtime(self) -> MissionRuntime:
+        """The mission runtime, made and installed on first use (the mission layer's
+        ``"mission_runtime"`` hook), its clock brought to the current step outside runs.
+
+        Raises:
+            RuntimeError: if the mission layer is not loaded (``import fleet_async.tasks``).
+        """
+        runtime = self._mission_runtime
+        if runtime is None:
+            runtime = mission_hook("mission_runtime")(self)
+            self._mission_runtime = runtime
+        runtime.touch()
+        return runtime
+
     def _runtime(self, what: str) -> MissionRuntime:
-        if self._mission_runtime is None:
-            raise _no_runtime(what)
-        return self._mission_runtime
+        runtime = self._mission_runtime
+        if runtime is None:
+            return self.ensure_mission_runtime()
+        runtime.touch()
+        return runtime
+
+    def suspended_missions(self) -> list[str]:
+        """Names of the missions alive between runs (a run stopped at ``until`` with them
+        waiting), in start order; empty when none are."""
+        runtime = self._mission_runtime
+        return [] if runtime is None else runtime.mission_names()
+
+    def end_missions(self) -> None:
+        """End the missions left waiting by ``fleet_async.run(..., until=t)``: each is
+        cancelled at the current sim time (its ``finally`` blocks run; sim awaits in them are
+        served at this step, without stepping), their queued requests are withdrawn and their
+        unfinished actions cancelled. The runtime is dropped; the next mission call makes a
+        fresh one.
+
+        Raises:
+            RuntimeError: during a run (cancel the missions from inside it instead).
+        """
+        runtime = self._mission_runtime
+        if runtime is not None:
+            runtime.end()
 
     @property
     def now(self) -> float:
@@ -203,10 +241,7 @@ class SimEventBus(EventBus):
     def wait(self, name: str, where: Callable[..., bool] | None = None) -> Any:
         """``await sim.events.wait(name, where)``: the next ``name`` event whose payload
         ``where(**payload)`` accepts, as a dict."""
-        runtime = self._owner.mission_runtime
-        if runtime is None:
-            raise _no_runtime("sim.events.wait")
-        return runtime.wait_event(name, where)
+        return self._owner.ensure_mission_runtime().wait_event(name, where)
 
     def stream(self, name: str, where: Callable[..., bool] | None = None) -> Any:
         """An async iterator over every ``name`` event from now on (``where`` filters)::
@@ -215,7 +250,4 @@ class SimEventBus(EventBus):
             async for payload in collisions:
                 ...
         """
-        runtime = self._owner.mission_runtime
-        if runtime is None:
-            raise _no_runtime("sim.events.stream")
-        return runtime.event_stream(name, where)
+        return self._owner.ensure_mission_runtime().event_stream(name, where)

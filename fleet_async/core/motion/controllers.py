@@ -329,9 +329,10 @@ class RandomWalkController(Controller):
         self._moved = False
 
     def on_install(self, agent: ControlledAgent) -> None:
-        """Seed the stream and fix the center."""
-        seed = 0 if agent.sim_core is None else agent.sim_core.params.seed
-        self._rng = np.random.default_rng([seed, max(agent.object_id, 0), 0x5A17])
+        """Take the agent's stream (``sim.rng_for(agent, 0x5A17)``) and fix the center."""
+        key = (max(agent.object_id, 0), 0x5A17)  # the stream of this agent's walk
+        host = agent.sim_core
+        self._rng = np.random.default_rng([0, *key]) if host is None else host.rng_for(*key)
         if self.center is None:
             self.center = agent.get_pose().position.copy()
 

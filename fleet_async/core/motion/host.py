@@ -3,16 +3,18 @@
 Controllers are handed an agent at every call (``compute(agent, dt)``, ``on_install``, ...),
 but read only these members of it: the built-in ones drive the agent's slot in the kinematic
 engine the agent hands them (``motion_engine``, ``motion_slot``); patrol and random walk read
-the agent's pose, whether it moves or has an action, the sim time and the seed, and send it
-a path or a goal. ``Agent`` satisfies ``ControlledAgent`` and ``MultiRobotSimulationCore``
-satisfies ``MotionHost``; this floor imports neither.
+the agent's pose, whether it moves or has an action, the sim time and their random stream
+(``rng_for``), and send it a path or a goal. ``Agent`` satisfies ``ControlledAgent`` and
+``MultiRobotSimulationCore`` satisfies ``MotionHost``; this floor imports neither.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from fleet_async.core.base.params import SimulationParams
     from fleet_async.core.base.types import MovementDirection
     from fleet_async.core.geometry.pose import Pose
@@ -29,13 +31,15 @@ class Numbered(Protocol):
 
 
 class MotionHost(Protocol):
-    """The simulation, as a controller sees it: the clock and the settings (for the seed)."""
+    """The simulation, as a controller sees it: the clock, the settings and random streams."""
 
     @property
     def sim_time(self) -> float: ...
 
     @property
     def params(self) -> SimulationParams: ...
+
+    def rng_for(self, *key: Any) -> np.random.Generator: ...
 
 
 class ControlledAgent(Numbered, Protocol):

@@ -152,8 +152,8 @@ class KinematicEngine(SlotTable):
             "columns": {name: getattr(self, name)[:high].copy() for name in COLUMNS},
         }
 
-    def set_state(self, state: dict[str, Any]) -> None:
-        """Restore :meth:`get_state` onto an engine whose slots hold the same store rows.
+    def check_state(self, state: dict[str, Any]) -> None:
+        """Check, changing nothing, that :meth:`set_state` can take ``state``.
 
         Raises:
             ValueError: if the slots hold other rows (a simulation built differently).
@@ -165,6 +165,19 @@ class KinematicEngine(SlotTable):
                 f"the checkpoint's motion slots ({high}) drive other objects than this "
                 f"simulation's ({self._high}): build it from the same scenario"
             )
+        for name, values in state["columns"].items():
+            column = getattr(self, name, None) if name in COLUMNS else None
+            if column is None or np.shape(values)[1:] != column.shape[1:] or len(values) != high:
+                raise ValueError(f"the checkpoint's motion column {name!r} does not fit")
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state` onto an engine whose slots hold the same store rows.
+
+        Raises:
+            ValueError: if the slots hold other rows (a simulation built differently).
+        """
+        self.check_state(state)
+        high = state["high"]
         for name, values in state["columns"].items():
             getattr(self, name)[:high] = values
         for slot in range(high):

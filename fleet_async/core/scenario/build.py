@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from fleet_async.core.base.config_utils import load_yaml_config, register_class, resolve_class
 from fleet_async.core.base.params import SimulationParams
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.devices import WorkcellPlugin
 from fleet_async.core.managers.agent_manager import AgentManager
@@ -258,6 +259,7 @@ def _build(
         if config.get("traffic") is not None:
             apply_traffic(sim, config["traffic"], where, base_dir)
         spawn_entities(sim, entities, where, base_dir, declared)
+        _refuse_duplicate_names(sim, where)
         for label, cls, plugin_config, frequency in plugins:
             with config_context(where, label):
                 sim.register_plugin(cls, config=plugin_config, frequency=frequency)
@@ -270,6 +272,29 @@ def _build(
         sim.close()
         raise
     return sim
+
+
+def _refuse_duplicate_names(sim: BuiltSim, where: str) -> None:
+    """A scenario names each body once: the log, the summary, the trace and the viewer show
+    those names, and two bodies called the same could not be told apart there.
+
+    Raises:
+        ValueError: naming the shared name, how many bodies (and their ids) carry it, and the
+            file.
+    """
+    holders: dict[str, list[int]] = {}
+    for obj in sim.sim_objects:
+        if obj.name:
+            holders.setdefault(obj.name, []).append(obj.object_id)
+    shared = {name: ids for name, ids in holders.items() if len(ids) > 1}
+    if shared:
+        name, ids = next(iter(shared.items()))
+        more = f" (and {len(shared) - 1} more shared names)" if len(shared) > 1 else ""
+        raise ValueError(
+            f"{where}entities: the name {name!r} is given to {len(ids)} bodies (object ids "
+            f"{', '.join(map(str, ids))}){more}; a scenario's names must be unique: give "
+            "each entry its own name (a grid entry numbers its bodies NAME_0, NAME_1, ...)"
+        )
 
 
 TRACE_KEYS = ("path", "every_n_steps", "fps")
@@ -359,7 +384,9 @@ def _plugin_spec(
     expect_type(entry, dict, "a mapping", where, label)
     reject_unknown_keys(list(entry), PLUGIN_KEYS, where, label)
     if ("type" in entry) == ("class" in entry):
-        raise ValueError(f"{where}{label}: give exactly one of 'type' or 'class', got {entry!r}")
+        raise ValueError(
+            f"{where}{label}: give exactly one of 'type' or 'class', got {short_repr(entry)}"
+        )
     if "type" in entry:
         name = entry["type"]
         if name not in SIM_PLUGIN_REGISTRY:

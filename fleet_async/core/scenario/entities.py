@@ -13,13 +13,17 @@ from collections.abc import Callable, Mapping
 from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from fleet_async.core.actions.action import Action, MoveAction, WaitAction
 from fleet_async.core.actions.arm_actions import JointAction, PoseAction
 from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.agents.agent import Agent
 from fleet_async.core.agents.agent_params import AgentSpawnParams
 from fleet_async.core.base.config_utils import dataclass_from_dict
+from fleet_async.core.base.memory import check_spawn_fits
 from fleet_async.core.base.paths import resolve_data_file
+from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
@@ -101,6 +105,12 @@ def spawn_entities(
         _plan_entity(sim, entry, f"entities[{i}]", where, base_dir, declared)
         for i, entry in enumerate(entries)
     ]
+    share = sim.params.memory_share
+    for plan in plans:  # the entry that cannot fit by itself is named first
+        if plan.grid is not None:
+            check_spawn_fits(plan.count, share, f"{where}{plan.label}.grid")
+    total = sum(p.count if p.grid is not None else 1 for p in plans)
+    check_spawn_fits(total, share, f"{where}entities")
     before = {obj.object_id for obj in sim.sim_objects}
     fresh: list[SimObjectManager[Any]] = []
     spawned: list[SimObject] = []
@@ -255,7 +265,7 @@ def _spawn_objects(
         return list(manager.spawn_objects_batch([plan.params]))
     configs = [plan.config]
     if plan.grid is not None:
-        cells = plan.grid.cell_positions()[: plan.count].tolist()
+        cells = plan.grid.cell_positions(np.arange(plan.count)).tolist()
         name = plan.config.get("name")
         configs = [
             {**plan.config, "pose": cell, **({} if name is None else {"name": f"{name}_{k}"})}
@@ -319,7 +329,9 @@ def _find_urdf(value: str, base: FsPath | None, label: str) -> str:
         return resolve_model(value)
     except ValueError as exc:
         first = f"tried {tried[0]}, then " if tried else ""
-        raise FileNotFoundError(f"{label}: file not found: {value!r} ({first}{exc})") from exc
+        raise FileNotFoundError(
+            f"{label}: file not found: {short_repr(value)} ({first}{exc})"
+        ) from exc
 
 
 def _find_mesh(value: str, base: FsPath | None, search: list[str], label: str) -> str:
@@ -337,7 +349,7 @@ def _path_value(value: Any) -> Path:
     if isinstance(value, Path):
         return value
     if not isinstance(value, list):
-        raise ValueError(f"expected a list of waypoints [[x, y, z], ...], got {value!r}")
+        raise ValueError(f"expected a list of waypoints [[x, y, z], ...], got {short_repr(value)}")
     waypoints = []
     for k, point in enumerate(value):
         try:

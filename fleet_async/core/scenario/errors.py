@@ -12,6 +12,8 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
+from fleet_async.core.base.reprs import short_repr
+
 __all__ = ["config_context", "expect_type", "reject_unknown_keys", "relabel_error", "where_prefix"]
 
 
@@ -66,5 +68,7 @@ def expect_type(
     value: Any, kind: type | tuple[type, ...], what: str, where: str, label: str
 ) -> Any:
     if not isinstance(value, kind):
-        raise ValueError(f"{where}{label}: expected {what}, got {value!r} ({type(value).__name__})")
+        raise ValueError(
+            f"{where}{label}: expected {what}, got {short_repr(value)} ({type(value).__name__})"
+        )
     return value

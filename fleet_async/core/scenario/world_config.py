@@ -18,6 +18,8 @@ from typing import Any
 
 import pybullet_data
 
+from fleet_async.core.base.reprs import short_repr
+
 __all__ = [
     "MESH_SUFFIXES",
     "OPTION_KEYS",
@@ -56,7 +58,9 @@ class WorldOptions:
 
 def _absolute(value: Any, key: str, base: FsPath) -> FsPath:
     if not isinstance(value, (str, os.PathLike)) or not os.fspath(value):
-        raise ValueError(f"load_world: world_config[{key!r}] must be a path, got {value!r}")
+        raise ValueError(
+            f"load_world: world_config[{key!r}] must be a path, got {short_repr(value)}"
+        )
     path = FsPath(os.fspath(value)).expanduser()
     return path if path.is_absolute() else base / path
 
@@ -65,7 +69,9 @@ def _names(value: Any, key: str) -> set[str]:
     if value is None:
         return set()
     if not isinstance(value, (list, tuple, set)) or not all(isinstance(v, str) for v in value):
-        raise ValueError(f"load_world: {key} must be a list of model names, got {value!r}")
+        raise ValueError(
+            f"load_world: {key} must be a list of model names, got {short_repr(value)}"
+        )
     return set(value)
 
 
@@ -97,7 +103,9 @@ def _model_paths(value: Any, base: FsPath) -> list[FsPath]:
     if value is None:
         return []
     if not isinstance(value, (list, tuple)):
-        raise ValueError(f"load_world: model_paths must be a list of directories, got {value!r}")
+        raise ValueError(
+            f"load_world: model_paths must be a list of directories, got {short_repr(value)}"
+        )
     paths = [_absolute(d, "model_paths", base) for d in value]
     for directory in paths:
         if not directory.is_dir():

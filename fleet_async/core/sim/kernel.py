@@ -46,6 +46,7 @@ from fleet_async.core.sim.objects_api import ObjectsApi
 from fleet_async.core.sim.plugins import SimPlugin, as_plugin
 from fleet_async.core.sim.profiling import MemoryProfiler, StepProfiler
 from fleet_async.core.sim.pybullet_view import PyBulletViewApi
+from fleet_async.core.sim.streams import RandomStreamsApi
 from fleet_async.core.world.attachments import AttachmentSet
 from fleet_async.core.world.backend import PyBulletBackend
 from fleet_async.core.world.state import KinematicState
@@ -73,7 +74,9 @@ class MotionSystem(Protocol):
         """Move every object this system owns by one step of ``dt`` seconds."""
 
 
-class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi):
+class SimulationKernel(
+    IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulletViewApi, RandomStreamsApi
+):
     """The clock, the step loop and what it moves (objects, agents, plugins, managers).
 
     Only ever built as a :class:`~fleet_async.core.simulation.MultiRobotSimulationCore`, which
@@ -466,7 +469,7 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
         for manager in self._managers:
             manager.clear()
         self._backend.reset_world()
-        self.rng = np.random.default_rng(self._params.seed if seed is None else seed)
+        self._reset_random_streams(self._params.seed if seed is None else seed)
         self.initialize_simulation()
         for obj in removed:
             self.events.emit(SimEvents.OBJECT_REMOVED, sim=self, obj=obj)
@@ -474,9 +477,16 @@ class SimulationKernel(IdleApi, SimMissionApi, CollisionApi, ObjectsApi, PyBulle
             plugin.on_reset()
 
     def close(self) -> None:
-        """Disconnect from PyBullet; the simulation cannot step afterwards."""
-        self._memory.stop()
-        self._backend.disconnect()
+        """End the missions a run left suspended (their cleanup runs now), then disconnect
+        from PyBullet; the simulation cannot step afterwards."""
+        try:
+            if self.mission_runtime is not None and not self.mission_runtime.driving:
+                self.end_missions()
+        except Exception:  # a mission's cleanup failed: still close
+            logger.exception("a mission failed while ending with its simulation")
+        finally:
+            self._memory.stop()
+            self._backend.disconnect()
 
     def __enter__(self: _Sim) -> _Sim:
         return self

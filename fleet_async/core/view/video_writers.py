@@ -7,7 +7,8 @@ created and raises an ImportError that says what to install.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable
+import zlib
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +16,10 @@ import numpy as np
 
 __all__ = ["INSTALL_HINT", "WRITERS", "GifWriter", "Mp4Writer", "import_or_explain"]
 
-INSTALL_HINT = 'pip install "fleet-async[record]"'
+INSTALL_HINT = (
+    'python -m pip install Pillow "imageio[pyav]" (or, in a fleet_async source checkout, '
+    'python -m pip install -e ".[record]")'
+)
 
 
 def import_or_explain(module: str, what: str) -> Any:
@@ -29,18 +33,44 @@ def import_or_explain(module: str, what: str) -> Any:
 
 
 class GifWriter:
-    """Buffers frames and writes a looping GIF on close (GIFs cannot be appended to)."""
+    """Collects frames and writes a looping GIF on close (GIFs cannot be appended to).
+
+    Frames are turned into palette images as they arrive, on the palette of the first frame
+    (a median cut of its colours; later colours take the nearest entry), and kept
+    zlib-compressed: converting and compressing a frame costs a few ms where Pillow's own
+    conversion of an RGB frame at save time costs ~80 ms at 800 x 600, and a frame of a
+    top-down recording is kept in ~10 kB instead of 1.4 MB.
+    """
 
     def __init__(self, path: Path, fps: int) -> None:
         self._image = import_or_explain("PIL.Image", "recording a .gif needs Pillow")
         self._path = path
         self._fps = fps
-        self._frames: list[tuple[Any, int]] = []
+        self._palette: Any = None
+        self._size: tuple[int, int] = (0, 0)
+        self._frames: list[tuple[bytes, int]] = []
 
     def add(self, frame: np.ndarray, repeat: int) -> None:
-        self._frames.append((self._image.fromarray(frame), repeat))
+        image = self._image.fromarray(frame)
+        pil = self._image
+        if self._palette is None:
+            self._palette = image.quantize(
+                colors=255, method=pil.Quantize.MEDIANCUT, dither=pil.Dither.NONE
+            )
+            self._size = image.size
+        indexed = image.quantize(palette=self._palette, dither=pil.Dither.NONE)
+        self._frames.append((zlib.compress(indexed.tobytes(), 1), repeat))
+
+    def _images(self) -> Iterator[Any]:
+        palette = self._palette.getpalette()
+        for data, _ in self._frames:
+            image = self._image.frombytes("P", self._size, zlib.decompress(data))
+            image.putpalette(palette)
+            yield image
 
     def close(self) -> None:
+        if not self._frames:
+            return
         # Delays are whole centiseconds; taking differences of the cumulative slot times keeps
         # the total playback time exact (e.g. 15 fps -> 6, 7, 7, 6, 7, 7, ... cs).
         durations_ms, slot = [], 0
@@ -48,12 +78,12 @@ class GifWriter:
             cs = ((slot + repeat) * 100) // self._fps - (slot * 100) // self._fps
             durations_ms.append(10 * cs)
             slot += repeat
-        images = [image for image, _ in self._frames]
-        images[0].save(
+        images = self._images()
+        next(images).save(
             self._path,
             format="GIF",
             save_all=True,
-            append_images=images[1:],
+            append_images=images,
             duration=durations_ms,
             loop=0,
         )

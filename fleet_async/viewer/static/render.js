@@ -5,19 +5,9 @@
 // positions, int16 yaw, flag bytes) for the two frames around the clock, and interpolates.
 "use strict";
 
-// A robot: an agent that is not a device (doors, lifts and workcells are agents too, and are
-// drawn in their own colours, without a heading mark, and not counted as robots).
-function isRobot(b) {
-  return b !== undefined && b !== null && b.kind === "agent" && !b.device;
-}
-
-const STATE_COLOURS = {
-  idle: [0.56, 0.64, 0.68],
-  moving: [0.16, 0.55, 0.95],
-  carrying: [0.98, 0.6, 0.1],
-  failed: [0.9, 0.15, 0.15],
-  collision: [0.95, 0.1, 0.6],
-};
+// Colours come from palette.js (STATE_COLOURS, OBJECT_COLOURS, robotState, objectKind).
+// Both renderers take a robot's activity (what its timeline says it is doing: ACTIVITY) in
+// bits 4-6 of its flags byte, beside the trace's moving / carrying / failed bits.
 
 const VERT = `#version 300 es
 in vec2 a_corner;
@@ -26,10 +16,11 @@ in float a_yaw0; in float a_yaw1;
 in float a_flags;
 in vec4 a_shape;   // centre x, y and half extents x, y in the body frame (m)
 in vec4 a_color;
+in vec4 a_kindColor; // the object kind's colour (palette.js), for colour by state
 in vec3 a_info;    // kind (0 static, 1 object, 2 agent), round (1 circle), top z in body frame
 uniform vec2 u_center; uniform vec2 u_scale; uniform float u_alpha; uniform float u_minHalf;
 uniform vec2 u_zrange; uniform float u_colorMode; uniform float u_pxPerM;
-uniform vec3 u_idle; uniform vec3 u_moving; uniform vec3 u_carrying; uniform vec3 u_failed;
+uniform vec3 u_palette[7];  // idle, moving, carrying, charging, waiting, stopped, failed
 out vec2 v_local; out vec2 v_halfPx; out vec4 v_color; out float v_round; out float v_collide;
 out float v_agent;
 const float PI = 3.14159265358979;
@@ -55,11 +46,17 @@ void main() {
   v_collide = (f & 8) != 0 ? 1.0 : 0.0;
   vec4 col = a_color;
   if (u_colorMode < 0.5 && a_info.x == 2.0) {
-    vec3 st = u_idle;
-    if ((f & 1) != 0) st = u_moving;
-    if ((f & 2) != 0) st = u_carrying;
-    if ((f & 4) != 0) st = u_failed;
-    col = vec4(st, 1.0);
+    int act = (f >> 4) & 7;   // palette.js robotState, in the same order
+    int st = 0;
+    if ((f & 4) != 0) st = 6;
+    else if (act == 2) st = 3;
+    else if (act == 3) st = 5;
+    else if ((f & 2) != 0) st = 2;
+    else if ((f & 1) != 0) st = 1;
+    else if (act == 1) st = 4;
+    col = vec4(u_palette[st], 1.0);
+  } else if (u_colorMode < 0.5 && a_kindColor.a > 0.0) {
+    col = a_kindColor;
   }
   v_color = col;
 }`;
@@ -105,9 +102,9 @@ class GLRenderer {
     this.gl = gl;
     this.prog = this.program(VERT, FRAG);
     this.loc = {};
-    for (const a of ["a_corner", "a_pos0", "a_pos1", "a_yaw0", "a_yaw1", "a_flags", "a_shape", "a_color", "a_info"]) this.loc[a] = gl.getAttribLocation(this.prog, a);
+    for (const a of ["a_corner", "a_pos0", "a_pos1", "a_yaw0", "a_yaw1", "a_flags", "a_shape", "a_color", "a_kindColor", "a_info"]) this.loc[a] = gl.getAttribLocation(this.prog, a);
     this.uni = {};
-    for (const u of ["u_center", "u_scale", "u_alpha", "u_minHalf", "u_zrange", "u_colorMode", "u_pxPerM", "u_idle", "u_moving", "u_carrying", "u_failed"]) this.uni[u] = gl.getUniformLocation(this.prog, u);
+    for (const u of ["u_center", "u_scale", "u_alpha", "u_minHalf", "u_zrange", "u_colorMode", "u_pxPerM", "u_palette"]) this.uni[u] = gl.getUniformLocation(this.prog, u);
     this.corner = this.buffer(new Float32Array([-1, -1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1]));
     this.layers = new Map();   // layout serial or "static" -> {vao, static buffers, dynamic slots}
     gl.enable(gl.BLEND);
@@ -155,8 +152,11 @@ class GLRenderer {
     if (layer) return layer;
     const gl = this.gl, n = bodies.length;
     const shape = new Float32Array(4 * n), color = new Uint8Array(4 * n), info = new Float32Array(3 * n);
+    const kindColor = new Uint8Array(4 * n);
     bodies.forEach((b, i) => {
       const s = b ? b.shapeInfo : null;
+      const kind = objectKind(b);
+      if (kind) kindColor.set([...OBJECT_COLOURS[kind].map((c) => Math.round(c * 255)), 255], 4 * i);
       if (s) {
         shape.set([s.center[0], s.center[1], s.radius || s.half[0], s.radius || s.half[1]], 4 * i);
         color.set(s.rgba.map((c) => Math.round(c * 255)), 4 * i);
@@ -171,6 +171,7 @@ class GLRenderer {
     this.attrib("a_corner", this.corner, 2, gl.FLOAT, false, 0);
     this.attrib("a_shape", this.buffer(shape), 4, gl.FLOAT, false, 1);
     this.attrib("a_color", this.buffer(color), 4, gl.UNSIGNED_BYTE, true, 1);
+    this.attrib("a_kindColor", this.buffer(kindColor), 4, gl.UNSIGNED_BYTE, true, 1);
     this.attrib("a_info", this.buffer(info), 3, gl.FLOAT, false, 1);
     const slot = () => ({
       frame: null,
@@ -184,21 +185,24 @@ class GLRenderer {
     return layer;
   }
 
-  upload(layer, slot, frame, statics) {
+  upload(layer, slot, frame, statics, activity) {
     const gl = this.gl;
-    if (slot.frame === frame || (window.viewer && window.viewer.debug.noUpload)) return;
+    const acts = !statics && activity ? activity(frame) : null;
+    if ((slot.frame === frame && slot.acts === acts) || (window.viewer && window.viewer.debug.noUpload)) return;
     slot.frame = frame;
+    slot.acts = acts;
     gl.bindBuffer(gl.ARRAY_BUFFER, slot.pos); gl.bufferSubData(gl.ARRAY_BUFFER, 0, frame.pos);
     gl.bindBuffer(gl.ARRAY_BUFFER, slot.yaw); gl.bufferSubData(gl.ARRAY_BUFFER, 0, frame.yaw);
     let flags = frame.flags;
-    if (frame.colliding && frame.colliding.length && !statics) {
+    if ((frame.colliding && frame.colliding.length && !statics) || acts) {
       flags = layer.flagScratch;
       flags.set(frame.flags);
       const index = frame.layout.index;
-      for (const id of frame.colliding) {
+      for (const id of statics ? [] : frame.colliding) {
         const i = index.get(id);
         if (i !== undefined) flags[i] |= 8;
       }
+      if (acts) for (const [i, code] of acts) flags[i] |= code << 4;
     }
     gl.bindBuffer(gl.ARRAY_BUFFER, slot.flags); gl.bufferSubData(gl.ARRAY_BUFFER, 0, flags);
   }
@@ -240,8 +244,7 @@ class GLRenderer {
     gl.uniform1f(u.u_minHalf, 1.6 / view.scale);   // robots stay at least ~3 px wide
     gl.uniform2f(u.u_zrange, scene.zrange[0], scene.zrange[1]);
     gl.uniform1f(u.u_colorMode, scene.colorMode === "body" ? 1 : 0);
-    gl.uniform3fv(u.u_idle, STATE_COLOURS.idle); gl.uniform3fv(u.u_moving, STATE_COLOURS.moving);
-    gl.uniform3fv(u.u_carrying, STATE_COLOURS.carrying); gl.uniform3fv(u.u_failed, STATE_COLOURS.failed);
+    gl.uniform3fv(u.u_palette, STATE_ORDER.flatMap((name) => STATE_COLOURS[name]));
     if (scene.statics && scene.statics.n) {
       const layer = this.layer("static", scene.statics.bodies);
       this.upload(layer, layer.slots[0], scene.statics.frame, true);
@@ -255,9 +258,9 @@ class GLRenderer {
       let [s0, s1] = layer.slots;
       // Reuse a slot that already holds one of the two frames (playback moves one frame on).
       if (s1.frame === f0 || s0.frame === f1) { [s0, s1] = [s1, s0]; layer.slots = [s0, s1]; }
-      this.upload(layer, s0, f0, false);
+      this.upload(layer, s0, f0, false, scene.activity);
       const same = f1 && f1.layout === f0.layout;
-      if (same) this.upload(layer, s1, f1, false);
+      if (same) this.upload(layer, s1, f1, false, scene.activity);
       this.bindSlots(layer, s0, same ? s1 : s0, same && scene.alpha > 0.5 ? s1 : s0);
       gl.uniform1f(u.u_alpha, same ? scene.alpha : 0);
       const dbg = window.viewer ? window.viewer.debug : {};
@@ -275,9 +278,10 @@ function packRGB(rgb, a) {
   const r = Math.round(rgb[0] * 255), g = Math.round(rgb[1] * 255), b = Math.round(rgb[2] * 255);
   return ((Math.round((a === undefined ? 1 : a) * 255) << 24) | (b << 16) | (g << 8) | r) >>> 0;
 }
-const PACKED = Object.fromEntries(Object.entries(STATE_COLOURS).map(([k, v]) => [k, packRGB(v)]));
-const PACKED_DARK = Object.fromEntries(Object.entries(STATE_COLOURS).map(([k, v]) => [k, packRGB(v.map((c) => c * 0.55))]));
-const PACKED_NOSE = Object.fromEntries(Object.entries(STATE_COLOURS).map(([k, v]) => [k, packRGB(v.map((c) => c * 0.35))]));
+const ALL_COLOURS = { ...STATE_COLOURS, ...OBJECT_COLOURS };
+const PACKED = Object.fromEntries(Object.entries(ALL_COLOURS).map(([k, v]) => [k, packRGB(v)]));
+const PACKED_DARK = Object.fromEntries(Object.entries(ALL_COLOURS).map(([k, v]) => [k, packRGB(v.map((c) => c * 0.55))]));
+const PACKED_NOSE = Object.fromEntries(Object.entries(ALL_COLOURS).map(([k, v]) => [k, packRGB(v.map((c) => c * 0.35))]));
 
 class PixelRenderer {
   constructor(canvas) {
@@ -369,9 +373,12 @@ class PixelRenderer {
       hx = Math.max(hx, minHalf); hy = Math.max(hy, minHalf);
       let fill, border, nose;
       const agent = isRobot(b);
+      const kind = byState ? objectKind(b) : null;
       if (agent && byState) {
-        const st = flags & 4 ? "failed" : flags & 2 ? "carrying" : flags & 1 ? "moving" : "idle";
+        const st = robotState(flags, flags >> 4);
         fill = PACKED[st]; border = PACKED_DARK[st]; nose = PACKED_NOSE[st];
+      } else if (kind) {
+        fill = PACKED[kind]; border = PACKED_DARK[kind]; nose = PACKED_NOSE[kind];
       } else {
         [fill, border, nose] = this.colours(shape);
       }
@@ -386,6 +393,7 @@ class PixelRenderer {
       const lerp = f1 && f1.layout === f0.layout && scene.alpha > 0 ? scene.alpha : 0;
       const p0 = f0.pos, y0 = f0.yaw, p1 = lerp ? f1.pos : p0, y1 = lerp ? f1.yaw : y0;
       const colliding = f0.colliding.length ? new Set(f0.colliding) : null;
+      const acts = byState && scene.activity ? new Map(scene.activity(f0) || []) : null;
       const k = Math.PI / 32767;
       // Objects first, then agents on top: a robot stays visible (orange: carrying) under
       // the box it carries, and over the totes it drives past.
@@ -401,7 +409,7 @@ class PixelRenderer {
             yaw += d * lerp;
           }
           body(b, p0[j] + (p1[j] - p0[j]) * lerp, p0[j + 1] + (p1[j + 1] - p0[j + 1]) * lerp, p0[j + 2] + (p1[j + 2] - p0[j + 2]) * lerp,
-            yaw, (lerp > 0.5 ? f1 : f0).flags[i], colliding !== null && colliding.has(ids[i]));
+            yaw, (lerp > 0.5 ? f1 : f0).flags[i] | (acts && acts.has(i) ? acts.get(i) << 4 : 0), colliding !== null && colliding.has(ids[i]));
         }
       }
     }

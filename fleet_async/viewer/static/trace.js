@@ -159,9 +159,15 @@ class TraceDecoder {
       const kind = dv.getUint32(0, true), length = dv.getUint32(4, true);
       const padded = length + ((4 - (length % 4)) % 4);
       if (this.pendingBytes < RECORD_HEADER + padded) break;
+      const at = this.offset;
       this.take(RECORD_HEADER);
       const payload = this.take(padded);
-      this.record(kind, payload, length);
+      try {
+        this.record(kind, payload, length);
+      } catch (e) {
+        if (e instanceof TraceFormatError) throw e;
+        throw this.error(`record ${this.records} (${KIND_NAME[kind] || kind}) at byte ${at}: ${e.message}`);
+      }
       this.records += 1;
       changed = true;
     }
@@ -169,9 +175,15 @@ class TraceDecoder {
     return changed;
   }
 
-  // Called when the stream ended: anything left over, or no end record, is reported.
+  // Called when the stream ended: anything left over, or no end record, is reported. A trace
+  // that ends early (a killed run) keeps its readable prefix: data.cut says what is missing;
+  // without even a META record there is nothing to show, and that is an error.
   finish() {
     if (!this.headerDone) throw this.error(`truncated: ${this.pendingBytes} bytes, shorter than the ${HEADER_SIZE}-byte header`);
+    const cut = (problem) => {
+      if (!this.data.meta) throw this.error(`${problem}; nothing to show before it (no META)`);
+      this.data.cut = `${this.data.name}: ${problem}; showing the readable prefix (${this.data.frames.length} frames)`;
+    };
     if (this.pendingBytes > 0) {
       let what = `${this.pendingBytes} bytes`;
       if (this.pendingBytes >= RECORD_HEADER) {
@@ -181,9 +193,9 @@ class TraceDecoder {
       } else {
         what = `record ${this.records} at byte ${this.offset} has only ${this.pendingBytes} of its ${RECORD_HEADER} header bytes`;
       }
-      throw this.error(`truncated: ${what}`);
+      return cut(`truncated: ${what}`);
     }
-    if (!this.data.end) throw this.error(`truncated: no end record after ${this.records} records (the run did not finish its trace: it is still running, or it stopped without stop_trace / close)`);
+    if (!this.data.end) cut(`truncated: no end record after ${this.records} records (the run did not finish its trace: it is still running, or it stopped without stop_trace / close)`);
   }
 
   json(payload, length) {

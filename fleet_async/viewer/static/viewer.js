@@ -1,5 +1,5 @@
 // The replay viewer: loads the trace as it streams in, plays it on a sim-time clock, draws it
-// top-down, and lists a selected robot's actions and events. A selected served vehicle (one
+// top-down, and shows a selected robot's timeline (timeline.js, panel.js), goal and path. A selected served vehicle (one
 // fleet masters send orders to) also shows its order, its task states and the commands it
 // received, and its route still to go is drawn on the canvas.
 //
@@ -17,6 +17,7 @@
 
   const data = new TraceData(traceName);
   const decoder = new TraceDecoder(data);
+  const timeline = new Timeline(data);
   const stage = $("stage"), grid = $("grid"), gl = $("gl"), overlay = $("overlay");
   // WebGL2 only on request or on a hardware GPU: software WebGL is far slower than the
   // Canvas2D pixel renderer at fleet sizes (see render.js).
@@ -40,10 +41,32 @@
 
   const view = { cx: 0, cy: 0, scale: 20, width: 800, height: 600, dpr: 1, userMoved: false };
   const clock = { t: 0, playing: false, speed: 1, last: null, follow: false, loop: params.get("loop") === "1" };
-  const ui = { selected: null, colorMode: "state", zrange: [-Infinity, Infinity], zAuto: true, error: null, done: false };
+  const ui = { selected: null, colorMode: "state", zrange: [-Infinity, Infinity], zAuto: true, error: null, done: false, labels: false };
+  const vehiclePanel = new VehiclePanel(data, $, app, (t) => { setPlaying(false); seek(t); });
+  const timelinePanel = new TimelinePanel(timeline, { filters: $("sel-filters"), list: $("sel-events"), count: $("sel-count"), doing: $("sel-doing") }, (t) => { setPlaying(false); seek(t); });
   const stats = { frames: 0, times: [], drawMs: [] };
   const debug = { skipGL: false, skipGrid: false, skipOverlay: false };
-  let statics = null, staticsCount = -1, dirty = true, layoutBodyCache = new Map();
+  let statics = null, staticsCount = -1, dirty = true, layoutBodyCache = new Map(), legendBodies = -1;
+  let activityCache = { version: -1, frames: new Map() };
+
+  // Per frame, [layout index, ACTIVITY code] of the robots doing something their flags do
+  // not say (palette.js robotState); only robots with events are looked at.
+  function activity(frame) {
+    if (activityCache.version !== data.version_) activityCache = { version: data.version_, frames: new Map() };
+    let list = activityCache.frames.get(frame);
+    if (list) return list.length ? list : null;
+    list = [];
+    const bodies = layoutBodies(frame.layout);
+    for (let i = 0; i < frame.layout.n; i++) {
+      const b = bodies[i];
+      if (!isRobot(b) || !b.events.length) continue;
+      const code = timeline.activityAt(b.id, frame.step).code;
+      if (code) list.push([i, code]);
+    }
+    if (activityCache.frames.size > 256) activityCache.frames.clear();
+    activityCache.frames.set(frame, list);
+    return list.length ? list : null;
+  }
 
   // ----- loading ----------------------------------------------------------------------------
 
@@ -102,6 +125,7 @@
       $("zmax").placeholder = data.zBounds[1].toFixed(2);
     }
     if (!view.userMoved) fit();
+    if (data.bodies.size !== legendBodies) { legendBodies = data.bodies.size; renderLegend($("legend"), data, ui.colorMode); }
     app.dataset.frames = String(data.frames.length);
     app.dataset.duration = String(data.duration);
     if (app.dataset.state === "loading" && data.frames.length) app.dataset.state = ui.done ? "ready" : "streaming";
@@ -234,7 +258,7 @@
     const alpha = f0 && f1 ? Math.min(Math.max((clock.t - f0.t) / (f1.t - f0.t || 1), 0), 1) : 0;
     if (!debug.skipGrid) drawGrid();
     if (!debug.skipGL) renderer.draw(view, {
-      statics: staticScene(), frame0: f0, frame1: f1, alpha, zrange: zrange(), colorMode: ui.colorMode, layoutBodies,
+      statics: staticScene(), frame0: f0, frame1: f1, alpha, zrange: zrange(), colorMode: ui.colorMode, layoutBodies, activity,
     });
     if (!debug.skipOverlay) drawOverlay(f0, f1, alpha);
     const simTime = f0 ? clock.t : 0;
@@ -246,7 +270,7 @@
     stats.frames++;
     stats.drawMs.push(performance.now() - t0);
     if (stats.drawMs.length > 600) stats.drawMs.shift();
-    if (ui.selected !== null) { updatePose(f0); updateVehicle(false); }
+    if (ui.selected !== null) { updatePose(f0); vehiclePanel.update(data.bodies.get(ui.selected), clock.t, false); }
   }
 
   function zrange() {
@@ -348,11 +372,18 @@
         ctx.fillText(`\u00d7${count}`, p.x + 6, p.y - 6);
       }
     }
+    if (ui.labels && f0) drawNames(ctx, f0, f1, alpha);
     drawnRoute = null;
+    drawnGoal = null;
     if (ui.selected === null) { app.dataset.routeNodes = ""; return; }
     const pose = bodyPose(f0, f1, alpha, ui.selected);
     if (!pose) { app.dataset.routeNodes = ""; return; }
-    drawRoute(ctx, pose);
+    drawnRoute = drawRoute(ctx, project, app, pose, data.vehicleStateAt(ui.selected, clock.t));
+    if (f0) {
+      const span = timeline.activityAt(ui.selected, f0.step).span;
+      const target = span && span.object !== undefined ? bodyPose(f0, f1, alpha, span.object) : null;
+      drawnGoal = drawGoal(ctx, project, pose, span, target);
+    }
     const b = data.bodies.get(ui.selected);
     const s = b && b.shapeInfo;
     const r = Math.max(8, (s ? (s.radius || Math.hypot(s.half[0], s.half[1])) : 0.1) * view.scale + 4);
@@ -360,50 +391,22 @@
     ctx.strokeStyle = "#111"; ctx.lineWidth = 2;
     ctx.beginPath(); ctx.arc(p.x, p.y, r, 0, 2 * Math.PI); ctx.stroke();
     ctx.font = "12px sans-serif"; ctx.fillStyle = "#111";
-    ctx.fillText(b && b.name ? b.name : `#${ui.selected}`, p.x + r + 3, p.y - r);
+    ctx.fillText(displayName(data, ui.selected), p.x + r + 3, p.y - r);
   }
 
-  // A served vehicle's route still to go at the clock's time: from the robot through its
-  // remaining nodes in order; released (base) part solid, horizon part dashed and lighter;
-  // nodes as circles (released filled, horizon hollow) labelled with their ids.
-  const ROUTE_COLOUR = "#00796b", ROUTE_HORIZON = "rgba(0, 121, 107, 0.5)";
-  let drawnRoute = null;   // what was drawn last, for tests (viewer.route())
+  let drawnGoal = null;   // the goal and path drawn last, for tests (viewer.goal())
+  let drawnRoute = null;  // a served vehicle's route drawn last (viewer.route())
 
-  function drawRoute(ctx, pose) {
-    const state = data.vehicleStateAt(ui.selected, clock.t);
-    const all = state && state.data && Array.isArray(state.data.nodes) ? state.data.nodes : [];
-    const nodes = all.filter((n) => Number.isFinite(n[3]) && Number.isFinite(n[4]));
-    app.dataset.routeNodes = String(nodes.length);
-    if (!nodes.length) return;
-    const start = project(pose.x, pose.y);
-    const points = nodes.map(([id, sequence, released, x, y]) => {
-      const p = project(x, y);
-      return { node_id: id, sequence, released: !!released, x, y, px: p.x, py: p.y };
-    });
-    drawnRoute = { vehicle: state.data.vehicle, order_id: state.data.order_id, from: { x: pose.x, y: pose.y, px: start.x, py: start.y }, points };
-    ctx.save();
-    ctx.lineCap = "round"; ctx.lineJoin = "round";
-    let prev = { px: start.x, py: start.y };
-    for (const q of points) {   // a segment is released when the node it leads to is
-      ctx.beginPath();
-      ctx.moveTo(prev.px, prev.py); ctx.lineTo(q.px, q.py);
-      if (q.released) { ctx.setLineDash([]); ctx.strokeStyle = ROUTE_COLOUR; ctx.lineWidth = 3; }
-      else { ctx.setLineDash([7, 5]); ctx.strokeStyle = ROUTE_HORIZON; ctx.lineWidth = 2; }
-      ctx.stroke();
-      prev = q;
+  function drawNames(ctx, f0, f1, alpha) {
+    const bodies = layoutBodies(f0.layout), items = [];
+    const [z0, z1] = zrange();
+    for (let i = 0; i < f0.layout.n; i++) {
+      const b = bodies[i];
+      if (!b || b.kind !== "agent" || b.id === ui.selected) continue;  // the selection has its own
+      const q = bodyPose(f0, f1, alpha, b.id);
+      if (q && q.z >= z0 && q.z <= z1) items.push([project(q.x, q.y), displayName(data, b.id)]);
     }
-    ctx.setLineDash([]);
-    ctx.font = "11px sans-serif";
-    for (const q of points) {
-      ctx.beginPath();
-      ctx.arc(q.px, q.py, 5, 0, 2 * Math.PI);
-      if (q.released) { ctx.fillStyle = ROUTE_COLOUR; ctx.fill(); }
-      else { ctx.fillStyle = "#fff"; ctx.fill(); ctx.strokeStyle = ROUTE_HORIZON; ctx.lineWidth = 2; ctx.stroke(); }
-      ctx.lineWidth = 3; ctx.strokeStyle = "#fff"; ctx.fillStyle = q.released ? ROUTE_COLOUR : "#4a7f79";
-      ctx.strokeText(String(q.node_id), q.px + 7, q.py + 14);
-      ctx.fillText(String(q.node_id), q.px + 7, q.py + 14);
-    }
-    ctx.restore();
+    app.dataset.labels = String(drawLabels(ctx, items, view.width, view.height, 400));
   }
 
   // ----- picking and the side panel -----------------------------------------------------------
@@ -441,49 +444,6 @@
     return ui.selected;
   }
 
-  function idList(ids) {
-    return ids.length <= 8 ? ids.join(" ") : `${ids.slice(0, 3).join(" ")} … ${ids.slice(-2).join(" ")} (${ids.length})`;
-  }
-
-  function describeVehicleState(d) {
-    const parts = [d.order_id ? `order ${d.order_id}/${d.order_update}` : "no order"];
-    if (d.last_node) parts.push(`last node ${d.last_node}`);
-    const nodes = d.nodes || [];
-    parts.push(nodes.length ? `${nodes.length} node${nodes.length > 1 ? "s" : ""} to go` : "nothing to go");
-    const tasks = (d.tasks || []).map(([id, , status]) => `${id} ${status}`);
-    if (tasks.length) parts.push(`tasks ${tasks.join(", ")}`);
-    if (d.paused) parts.push("paused");
-    if (d.errors && d.errors.length) parts.push(`${d.errors.length} error${d.errors.length > 1 ? "s" : ""}`);
-    return `vehicle state: ${parts.join(", ")}`;
-  }
-
-  function describeCommand(c) {
-    const cmd = c.command || {};
-    const tasksOf = (list) => (list || []).map((k) => `${k.kind} ${k.task_id}`).join(", ");
-    if (cmd.type === "order") {
-      const nodes = cmd.nodes || [];
-      const base = nodes.filter((n) => n.released).map((n) => n.node_id);
-      const horizon = nodes.filter((n) => !n.released).map((n) => n.node_id);
-      let text = `order ${cmd.order_id} update ${cmd.update}: nodes ${idList(base)}`;
-      if (horizon.length) text += ` + horizon ${idList(horizon)}`;
-      const tasks = tasksOf(nodes.flatMap((n) => n.tasks || []));
-      if (tasks) text += `; tasks ${tasks}`;
-      return text;
-    }
-    if (cmd.type === "instant") return `instant ${tasksOf(cmd.tasks)}`;
-    if (cmd.type === "rejection") return `rejected ${cmd.kind}${cmd.description ? ": " + cmd.description : ""}`;
-    return String(cmd.type);
-  }
-
-  function describeEvent(e) {
-    const d = e.data || {};
-    if (e.kind === "vehicle_state") return describeVehicleState(d);
-    if (e.kind === "action_started") return `${d.action} started`;
-    if (e.kind === "action_ended") return `${d.action} ${d.status}${d.reason ? ": " + d.reason : ""}`;
-    const rest = Object.entries(d).map(([k, v]) => `${k}=${typeof v === "object" ? JSON.stringify(v) : v}`).join(" ");
-    return `${e.kind}${rest ? " " + rest : ""}`;
-  }
-
   function updateSelection() {
     const panel = $("details");
     const wasHidden = panel.hidden;
@@ -491,115 +451,12 @@
     // The panel takes width from the stage: size the canvases to it again (else they are
     // drawn squeezed, and circles become ellipses).
     if (panel.hidden !== wasHidden) resize();
-    if (ui.selected === null) return;
+    if (ui.selected === null) { vehiclePanel.update(null, clock.t, true); return; }
     const b = data.bodies.get(ui.selected);
-    $("sel-name").textContent = b ? `${b.name || "(unnamed)"}  #${b.id}` : `#${ui.selected}`;
-    $("sel-kind").textContent = b ? `${b.kind} · ${b.class}` : "";
-    const list = $("sel-events");
-    const items = [];
-    const events = b ? b.events : [];
-    for (const e of events) items.push({ t: e.t, text: describeEvent(e), kind: e.kind });
-    let collisions = 0;
-    for (const c of data.collisions) {
-      if (c.a !== ui.selected && c.b !== ui.selected) continue;
-      if (collisions++ > 200) break;
-      const other = c.a === ui.selected ? c.b : c.a;
-      const ob = data.bodies.get(other);
-      items.push({ t: c.step * data.timestep, text: `collision ${c.started ? "started" : "ended"} with ${ob && ob.name ? ob.name : "#" + other}`, kind: "collision" });
-    }
-    items.sort((x, y) => x.t - y.t);
-    list.replaceChildren(...items.map((it) => {
-      const li = document.createElement("li");
-      li.className = it.kind;
-      li.dataset.t = String(it.t);
-      li.textContent = `${it.t.toFixed(2)} s  ${it.text}`;
-      li.onclick = () => { setPlaying(false); seek(it.t); };
-      return li;
-    }));
-    $("sel-count").textContent = `${items.filter((x) => x.kind.startsWith("action")).length} action events, ${collisions} collision events`;
-    updateVehicle(true);
-  }
-
-  // The served-vehicle part of the panel. The command list is rebuilt when the selection or
-  // the data change; the state part when the state at the clock's time is another event, so a
-  // render costs a binary search when nothing changed.
-  const vehicleView = { id: null, state: undefined, current: undefined, commands: [] };
-
-  function updateVehicle(rebuild) {
-    const section = $("sel-vehicle");
-    const b = ui.selected === null ? null : data.bodies.get(ui.selected);
-    if (!b || !data.isServed(b)) {
-      section.hidden = true;
-      vehicleView.id = null;
-      app.dataset.orderId = "";
-      return;
-    }
-    section.hidden = false;
-    if (rebuild || vehicleView.id !== b.id) {
-      vehicleView.id = b.id;
-      vehicleView.state = undefined;
-      vehicleView.current = undefined;
-      vehicleView.commands = data.vehicleCommands.get(b.name) || [];
-      $("sel-command-count").textContent = `(${vehicleView.commands.length})`;
-      $("sel-commands").replaceChildren(...vehicleView.commands.map((c) => {
-        const li = document.createElement("li");
-        li.className = `command ${c.command && c.command.type}`;
-        li.dataset.t = String(c.t);
-        li.textContent = `${c.t.toFixed(2)} s  ${describeCommand(c)}`;
-        li.title = JSON.stringify(c.command);
-        li.onclick = () => { setPlaying(false); seek(c.t); };
-        return li;
-      }));
-    }
-    const state = data.vehicleStateAt(b.id, clock.t);
-    if (state !== vehicleView.state) {
-      vehicleView.state = state;
-      showVehicleState(state ? state.data || {} : null);
-    }
-    // Commands at or before the clock are done; the latest of them is the current one.
-    const current = TraceData.lastAt(vehicleView.commands, clock.t);
-    if (current !== vehicleView.current) {
-      vehicleView.current = current;
-      $("sel-commands").querySelectorAll("li").forEach((li, i) => {
-        li.classList.toggle("future", i > current);
-        li.classList.toggle("current", i === current);
-      });
-    }
-  }
-
-  function showVehicleState(d) {
-    app.dataset.orderId = d && d.order_id ? String(d.order_id) : "";
-    if (!d) {
-      $("sel-order").textContent = "no order yet";
-      $("sel-route").textContent = "";
-      $("sel-tasks").hidden = true;
-      $("sel-errors").hidden = true;
-      return;
-    }
-    const order = d.order_id ? `order ${d.order_id} · update ${d.order_update}` : "no order";
-    $("sel-order").textContent = `${order} · last node ${d.last_node || "–"}${d.paused ? " · paused" : ""}`;
-    const nodes = d.nodes || [], edges = d.edges || [];
-    const split = (list, at) => [list.filter((x) => x[at]).map((x) => x[0]), list.filter((x) => !x[at]).map((x) => x[0])];
-    const [nb, nh] = split(nodes, 2), [eb, eh] = split(edges, 2);
-    const line = (what, base, horizon) => `${what} ${base.length ? idList(base) : "–"}${horizon.length ? " | horizon " + idList(horizon) : ""}`;
-    $("sel-route").textContent = nodes.length || edges.length
-      ? `${line("nodes to go:", nb, nh)}\n${line("edges to go:", eb, eh)}`
-      : d.order_id ? "order done: no nodes to go" : "";
-    const tasks = d.tasks || [];
-    $("sel-tasks").hidden = tasks.length === 0;
-    $("sel-tasks").tBodies[0].replaceChildren(...tasks.map(([id, kind, status]) => {
-      const tr = document.createElement("tr");
-      tr.className = `task ${status}`;
-      for (const v of [id, kind, status]) { const td = document.createElement("td"); td.textContent = String(v); tr.append(td); }
-      return tr;
-    }));
-    const errors = d.errors || [];
-    $("sel-errors").hidden = errors.length === 0;
-    $("sel-errors").replaceChildren(...errors.map(([kind, description]) => {
-      const li = document.createElement("li");
-      li.textContent = `${kind}: ${description}`;
-      return li;
-    }));
+    $("sel-name").textContent = `${displayName(data, ui.selected)}  #${ui.selected}`;
+    $("sel-kind").textContent = b ? `${b.kind}${objectKind(b) ? " · " + objectKind(b) : ""} · ${b.class}` : "";
+    timelinePanel.show(ui.selected, data.version_);
+    vehiclePanel.update(b || null, clock.t, true);
   }
 
   function updatePose(f0) {
@@ -608,7 +465,9 @@
     if (!p) { $("sel-pose").textContent = "not in the scene at this time"; return; }
     const fl = p.flags || 0;
     const colliding = f0 && f0.colliding.includes(ui.selected);
-    const state = fl & 4 ? "failed" : fl & 2 ? "carrying" : fl & 1 ? "moving" : "idle";
+    const b = data.bodies.get(ui.selected);
+    const state = isRobot(b) ? robotState(fl, timeline.activityAt(ui.selected, f0.step).code) : objectKind(b) || b.kind;
+    if (isRobot(b)) timelinePanel.doing(ui.selected, f0.step, state); else $("sel-doing").textContent = "";
     $("sel-pose").textContent = `x ${p.x.toFixed(2)}  y ${p.y.toFixed(2)}  z ${p.z.toFixed(2)} m  yaw ${((p.yaw * 180) / Math.PI).toFixed(1)}°  ${state}${colliding ? ", colliding" : ""}`;
     app.dataset.selectedState = state;
     void i;
@@ -641,7 +500,9 @@
   $("speed").onchange = () => { clock.speed = parseFloat($("speed").value); };
   $("scrub").oninput = () => { seek(parseFloat($("scrub").value)); };
   $("fit").onclick = () => { view.userMoved = false; fit(); };
-  $("colour").onchange = () => { ui.colorMode = $("colour").value; dirty = true; };
+  $("colour").onchange = () => { setColorMode($("colour").value); };
+  $("labels").onchange = () => { ui.labels = $("labels").checked; dirty = true; };
+  function setColorMode(m) { ui.colorMode = m; $("colour").value = m; renderLegend($("legend"), data, m); dirty = true; render(); }
   for (const id of ["zmin", "zmax"]) $(id).oninput = () => { dirty = true; };
   $("close-details").onclick = () => select(null);
   document.addEventListener("keydown", (e) => {
@@ -671,6 +532,7 @@
     // Colour of the bodies layer at CSS pixel (x, y) of the stage: [r, g, b, a], 0..255.
     pixelAt: (x, y) => renderer.pixelAt(x * view.dpr, y * view.dpr),
     stateColours: () => ({ ...STATE_COLOURS }),
+    objectColours: () => ({ ...OBJECT_COLOURS }),
     // The route drawn for the selected served vehicle (null if none): vehicle, order_id, from
     // (the robot) and points (its nodes still to go), each with world x, y and CSS px, py.
     route: () => (drawnRoute ? JSON.parse(JSON.stringify(drawnRoute)) : null),
@@ -679,7 +541,13 @@
     overlayPixelAt: (x, y) => Array.from(overlay.getContext("2d").getImageData(Math.round(x * view.dpr), Math.round(y * view.dpr), 1, 1).data),
     poseOf: (id) => { const i = frameIndex(); return bodyPose(i >= 0 ? data.frames[i] : null, null, 0, id); },
     setZRange: (lo, hi) => { $("zmin").value = lo === null ? "" : String(lo); $("zmax").value = hi === null ? "" : String(hi); dirty = true; render(); },
-    setColorMode: (m) => { ui.colorMode = m; $("colour").value = m; dirty = true; render(); },
+    setColorMode,
+    setLabels: (on) => { ui.labels = !!on; $("labels").checked = ui.labels; dirty = true; render(); return ui.labels; },
+    setFilter: (kind, on) => { timelinePanel.setShown(kind, !!on); updateSelection(); return [...timelinePanel.shown]; },
+    timeline: (id) => timeline.rows(id === undefined ? ui.selected : id, new Set(Object.keys(TIMELINE_KINDS))).map((r) => ({ kind: r.kind, t: r.t, t1: r.t1, text: r.text })),
+    displayName: (id) => displayName(data, id),
+    legend: () => legendItems(data, ui.colorMode).map((it) => it.text),
+    goal: () => (drawnGoal ? JSON.parse(JSON.stringify(drawnGoal)) : null),
     state: () => ({ simTime: clock.t, frame: frameIndex(), frames: data.frames.length, playing: clock.playing, selected: ui.selected, error: ui.error, done: ui.done, bodies: data.bodies.size, renderer: renderer.kind, view: { ...view } }),
     stats: () => ({ frames: stats.frames, times: stats.times.slice(), drawMs: stats.drawMs.slice() }),
     resetStats: () => { stats.frames = 0; stats.times.length = 0; stats.drawMs.length = 0; },

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.view.trace.action_info import describe_end, describe_start
 from fleet_async.core.view.trace.format import RecordKind
 
 if sys.version_info < (3, 11):  # anyio depends on the backport there
@@ -64,6 +65,8 @@ class TraceEventLog:
             (SimEvents.ACTION_COMPLETED, self._on_action_ended),
             (SimEvents.ACTION_FAILED, self._on_action_ended),
             (SimEvents.MISSION_FAILED, self._on_mission_failed),
+            (SimEvents.TASK_COMPLETED, self._on_task_completed),
+            (SimEvents.TASK_FAILED, self._on_task_failed),
         ]
 
     @property
@@ -115,7 +118,7 @@ class TraceEventLog:
             self._failed.discard(agent.object_id)
             self.flag_version += 1
         t = action.start_time if action.start_time is not None else self._now()
-        data = {"action": type(action).__name__}
+        data = {"action": type(action).__name__, **describe_start(action, self._sim.sim_objects)}
         self._events.append([t, self.step_stamp(), "action_started", agent.object_id, data])
 
     def _on_action_ended(self, agent: Any, action: Any, **_: Any) -> None:
@@ -125,6 +128,7 @@ class TraceEventLog:
             self.flag_version += 1
         t = action.end_time if action.end_time is not None else self._now()
         data: dict[str, Any] = {"action": type(action).__name__, "status": status}
+        data.update(describe_end(action))
         if action.error_message:
             data["reason"] = action.error_message
         self._events.append([t, self.step_stamp(), "action_ended", agent.object_id, data])
@@ -139,6 +143,16 @@ class TraceEventLog:
             holder = getattr(leaf, "agent", None) or getattr(leaf, "obj", None)
             data = {"mission": mission, "error": type(leaf).__name__, "message": str(leaf)}
             self.event("mission_error", getattr(holder, "object_id", None), **data)
+
+    def _on_task_completed(self, agent: Any = None, task: Any = None, **_: Any) -> None:
+        self._task_event("task_completed", agent, task)
+
+    def _on_task_failed(self, agent: Any = None, task: Any = None, **_: Any) -> None:
+        self._task_event("task_failed", agent, task)
+
+    def _task_event(self, kind: str, agent: Any, task: Any) -> None:
+        """A task (an order, a job) ended: ``task`` is its ``str``, what the timeline shows."""
+        self.event(kind, getattr(agent, "object_id", None), task=str(task))
 
     def command(self, step: int, vehicle: str, command: Any) -> None:
         """A fleet master's command, applied to ``vehicle`` at the boundary before ``step``
