@@ -29,7 +29,8 @@ from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.motion.controllers import CONTROLLER_REGISTRY, ControllerParams
 from fleet_async.core.motion.ik import IKParams
-from fleet_async.core.scenario import build, entities, missions, world_config
+from fleet_async.core.collision.safety_params import SafetyFieldParams
+from fleet_async.core.scenario import build, entities, missions, traffic, world_config
 from fleet_async.core.world.shapes import ShapeParams
 
 MARKER = "<!-- scenario-reference -->"
@@ -51,6 +52,16 @@ SECTION_TEXT = {
     "serve": "What `fleet-async serve` serves to fleet software: `robots` (default all), "
     "`broker` and the VDA 5050 settings (`version`, `manufacturer`, `serial_numbers`, ...; "
     "[Fleet interfaces](fleet-interfaces.md)). Other commands ignore it.",
+    "traffic": "A route graph, grid maps and the deadlock time (below; "
+    "[Traffic](traffic.md)).",
+}
+TRAFFIC_TEXT = {
+    "route_graph": "A YAML route graph or a LIF layout (`.json` / `.lif`), or "
+    "`{path, layout_id, vehicle_type}`; robots plan `go_to_node` on it.",
+    "maps": "A list of map_server `.yaml` or MovingAI `.map` files, or "
+    "`{path, resolution, height, tile}` mappings: static obstacles (`sim.load_map`).",
+    "deadlock_after": "Seconds robots held by each other's safety fields wait before "
+    "`deadlock_suspected` (default 10).",
 }
 WORLD_TEXT = {
     "world_file": "A Gazebo `.world` file (its `model://` includes are resolved).",
@@ -327,6 +338,16 @@ def sections() -> list[tuple[str, str, list[Key]]]:
             "trace",
             "`sim.start_trace(**trace)`; `fleet-async run --trace` / `--view` replace it.",
             text_keys(TRACE_TEXT, build.TRACE_KEYS),
+        ),
+        (
+            "traffic",
+            "Relative paths are taken from the scenario file's folder.",
+            text_keys(TRAFFIC_TEXT, traffic.TRAFFIC_KEYS),
+        ),
+        (
+            "safety_field",
+            "An agent's `safety_field`: `SafetyFieldParams` (`true` for the defaults).",
+            dataclass_keys(SafetyFieldParams),
         ),
     ]
     return parts

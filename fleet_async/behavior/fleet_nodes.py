@@ -10,6 +10,7 @@ literals, or blackboard entries holding a Pose or a list of numbers; a path (``M
 Node                    Does (and awaits)
 ======================  =================================================================
 MoveTo goal             ``robot.move(goal)`` (a pose or a path); NavigateTo is the same
+GoToNode node           ``robot.go_to_node(node)``: the quickest route on the route graph
 WaitRandom              ``sim.sleep(uniform(min_seconds, max_seconds))`` (the tree's rng)
 Pick object             ``robot.pick(object)``
 Drop pose               ``robot.drop(pose)``
@@ -45,6 +46,10 @@ def _robot(ctx: NodeContext, robot: Any) -> Agent:
 
 async def _move_to(ctx: NodeContext, goal: Any, robot: Any) -> None:
     await _robot(ctx, robot).move(goal)
+
+
+async def _go_to_node(ctx: NodeContext, node: str, robot: Any) -> None:
+    await _robot(ctx, robot).go_to_node(node)
 
 
 async def _wait_random(ctx: NodeContext, min_seconds: float, max_seconds: float) -> None:
@@ -118,6 +123,13 @@ FLEET_MODELS: dict[str, NodeModel] = {
             InputPort("goal", "path"),
             _ROBOT,
             description="drive to goal (the reference runner's name for MoveTo)",
+        ),
+        _action(
+            "GoToNode",
+            _go_to_node,
+            InputPort("node", str),
+            _ROBOT,
+            description="drive the route graph's quickest route to node",
         ),
         _action(
             "WaitRandom",

@@ -65,6 +65,7 @@ from fleet_async.core.bodies.models import (
 from fleet_async.core.bodies.sim_object import ObjectRemovedError, SimObject
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
 from fleet_async.core.checkpoint.format import CheckpointError
+from fleet_async.core.collision.safety_params import SafetyFieldParams
 from fleet_async.core.devices import (
     DispenseAction,
     Door,
@@ -86,6 +87,7 @@ from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.managers.agent_manager import AgentManager
 from fleet_async.core.managers.grid_spawn import GridSpawnParams
 from fleet_async.core.managers.sim_object_manager import SimObjectManager, register_entity_class
+from fleet_async.core.maps import GridMap, OccupancyGrid, read_movingai_scen
 from fleet_async.core.metrics.kpis import KpiCollector
 from fleet_async.core.metrics.rows import FleetKpis, RobotKpis
 from fleet_async.core.motion.controllers import (
@@ -100,6 +102,13 @@ from fleet_async.core.motion.controllers import (
     register_controller,
 )
 from fleet_async.core.motion.ik import IKParams
+from fleet_async.core.routes import (
+    FollowRouteAction,
+    RouteEdge,
+    RouteGraph,
+    RouteNode,
+    load_route_graph,
+)
 from fleet_async.core.scenario.world_loader import WorldLoadError, WorldLoadFailure
 from fleet_async.core.sim.plugins import SimPlugin
 from fleet_async.core.simulation import MultiRobotSimulationCore
@@ -142,6 +151,8 @@ __all__ = [
     "ElevatorState",
     "EventBus",
     "FleetKpis",
+    "FollowRouteAction",
+    "GridMap",
     "GridSpawnParams",
     "IKParams",
     "IngestAction",
@@ -155,6 +166,7 @@ __all__ = [
     "MultiRobotSimulationCore",
     "NamedLazyLogger",
     "ObjectRemovedError",
+    "OccupancyGrid",
     "OmniController",
     "Path",
     "PatrolController",
@@ -165,6 +177,10 @@ __all__ = [
     "PosePhase",
     "RandomWalkController",
     "RobotKpis",
+    "RouteEdge",
+    "RouteGraph",
+    "RouteNode",
+    "SafetyFieldParams",
     "ShapeParams",
     "SimEvents",
     "SimObject",
@@ -190,8 +206,10 @@ __all__ = [
     "list_model_search_paths",
     "list_models",
     "load_config",
+    "load_route_graph",
     "load_yaml_config",
     "merge_configs",
+    "read_movingai_scen",
     "register_controller",
     "register_entity_class",
     "register_model",

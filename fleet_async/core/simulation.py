@@ -13,7 +13,9 @@ from collections.abc import Sequence
 
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.checkpoint.api import CheckpointApi
+from fleet_async.core.maps.api import MapsApi
 from fleet_async.core.metrics.kpis import KpiApi
+from fleet_async.core.routes.api import RoutesApi
 from fleet_async.core.scenario.build import ScenarioApi
 from fleet_async.core.scenario.world_loader import WorldLoadingApi
 from fleet_async.core.sim.kernel import SimulationKernel
@@ -34,6 +36,8 @@ class MultiRobotSimulationCore(
     MonitorApi,
     GuiApi,
     KpiApi,
+    RoutesApi,
+    MapsApi,
     CheckpointApi,
     SimulationKernel,
 ):
@@ -49,6 +53,7 @@ class MultiRobotSimulationCore(
         self, params: SimulationParams | None = None, collision_color: Sequence[float] | None = None
     ) -> None:
         super().__init__(params, collision_color)
+        self.safety.recorder = self.trace_event  # safety stops and deadlocks in the trace
         self._start_gui_camera()
 
     def run_simulation(self, duration: float | None = None) -> None:

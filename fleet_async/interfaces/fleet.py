@@ -111,6 +111,10 @@ class FleetInterface:
         self._listeners: list[FleetListener] = []
         self._closed = False
         sim.events.on(SimEvents.PRE_STEP, self._on_pre_step)
+        # A safety stop starting or ending changes the state (driving, fieldViolation).
+        self._name_of = {id(v.agent): name for name, v in self.vehicles.items()}
+        sim.events.on(SimEvents.SAFETY_STOP_STARTED, self._on_safety)
+        sim.events.on(SimEvents.SAFETY_STOP_ENDED, self._on_safety)
 
     @staticmethod
     def _select(sim: Any, robots: Sequence[str] | None) -> list[tuple[str, Any]]:
@@ -191,10 +195,18 @@ class FleetInterface:
             return
         self._closed = True
         self.sim.events.off(SimEvents.PRE_STEP, self._on_pre_step)
+        self.sim.events.off(SimEvents.SAFETY_STOP_STARTED, self._on_safety)
+        self.sim.events.off(SimEvents.SAFETY_STOP_ENDED, self._on_safety)
         for vehicle in self.vehicles.values():
             vehicle.agent.external_driver = None
 
     # ----- the step boundary ----------------------------------------------------------------
+
+    def _on_safety(self, agent: Any, **_: Any) -> None:
+        name = self._name_of.get(id(agent))
+        if name is not None:
+            self._reasons[name].append("field_violation")
+            self._changed.add(name)
 
     def _on_pre_step(self, step: int, **_: Any) -> None:
         with self._lock:

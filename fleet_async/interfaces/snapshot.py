@@ -108,6 +108,8 @@ class VehicleSnapshot:
         errors: Errors not yet resolved.
         distance_since_last_node: m driven since the last node.
         node_positions: ``(x, y)`` (m) of each of ``nodes``, in the same order.
+        field_violation: Whether something is in its protective safety field (it is stopped
+            by it; VDA 5050's ``safetyState.fieldViolation``).
     """
 
     name: str
@@ -134,6 +136,7 @@ class VehicleSnapshot:
     errors: tuple[VehicleError, ...]
     distance_since_last_node: float = 0.0
     node_positions: tuple[tuple[float, float], ...] = ()
+    field_violation: bool = False
 
 
 class VehiclePose(NamedTuple):

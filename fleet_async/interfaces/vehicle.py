@@ -133,7 +133,9 @@ class Vehicle:
         v = agent.velocity
         c, s = math.cos(yaw), math.sin(yaw)
         host = self._host
+        stopped = host.safety.is_stopped(agent)  # by its protective field: not driving
         return VehicleSnapshot(
+            field_violation=stopped,
             name=self.name,
             step=host.step_count,
             sim_time=host.sim_time,
@@ -143,7 +145,7 @@ class Vehicle:
             vx=float(c * v[0] + s * v[1]),
             vy=float(-s * v[0] + c * v[1]),
             omega=float(agent.angular_velocity),
-            driving=bool(agent.is_moving),
+            driving=bool(agent.is_moving) and not stopped,
             paused=self.paused,
             battery_charge=float(agent.battery_soc) * 100.0,
             charging=bool(agent.is_charging),

@@ -135,7 +135,7 @@ def test_bad_arguments_are_rejected():
 
 def test_sim_events_lists_every_name_once():
     names = SimEvents.all()
-    assert len(names) == len(set(names)) == 19
+    assert len(names) == len(set(names)) == 22
     assert SimEvents.PRE_STEP in names and SimEvents.ACTION_FAILED in names
     assert SimEvents.TASK_COMPLETED in names and SimEvents.TASK_FAILED in names
     assert SimEvents.MISSION_FAILED in names

@@ -56,8 +56,9 @@ def test_step_phases_run_in_design_order(sim):
 
 
 def test_return_profiling_has_the_reference_keys_and_custom_fields(sim):
-    # The reference API's step_once(return_profiling=True) keys, plus attachments (ours) and
-    # custom fields; collision_breakdown is "present only when collision ran".
+    # The reference API's step_once(return_profiling=True) keys, plus attachments and
+    # safety_fields (ours) and custom fields; collision_breakdown is "present only when
+    # collision ran".
     sim.register_callback(lambda s, dt: s.record_profiling("custom_logic", 1.5))
     sim.register_callback(lambda s, dt: s.record_profiling("custom_logic", 0.5))
     timings = sim.step_once(return_profiling=True)
@@ -67,6 +68,7 @@ def test_return_profiling_has_the_reference_keys_and_custom_fields(sim):
         "phase3_aabb_grid_flush",
         "agent_update",
         "attachments",
+        "safety_fields",
         "callbacks",
         "step_simulation",
         "collision_check",

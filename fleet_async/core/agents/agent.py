@@ -182,6 +182,8 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         try:
             for i, entry in enumerate(spawn_params.plugins or []):
                 agent.add_plugin(create_agent_plugin(agent, entry, where=f"plugins[{i}]"))
+            if spawn_params.safety_field is not None and sim_core is not None:
+                sim_core.safety.enable(agent, spawn_params.safety_field)
         except Exception:
             if sim_core is not None:  # never leave a half-built agent behind
                 sim_core.remove_object(agent)

@@ -9,6 +9,7 @@ from typing import Any, ClassVar
 from fleet_async.core.base.config_utils import dataclass_from_dict
 from fleet_async.core.base.types import MotionMode, coerce_enum
 from fleet_async.core.bodies.spawn_params import SimObjectSpawnParams
+from fleet_async.core.collision.safety_params import SafetyFieldParams
 from fleet_async.core.motion.ik import IKParams
 
 __all__ = ["AgentSpawnParams", "IKParams"]
@@ -33,6 +34,8 @@ class AgentSpawnParams(SimObjectSpawnParams):
         ik_params: IK settings for arms.
         controller: Controller selector or configuration (see ``Agent``).
         plugins: Per-agent plugin entries ``{"type": "battery", "config": {...}}``.
+        safety_field: Protective and warning fields (``SafetyFieldParams``, a mapping of
+            its fields, or True for the defaults); None (the default) for none.
     """
 
     # Widened for URDF robots only: shape-based and virtual agents are refused a None mass in
@@ -44,6 +47,7 @@ class AgentSpawnParams(SimObjectSpawnParams):
     ik_params: IKParams | None = None
     controller: Any = None
     plugins: list[dict[str, Any]] | None = None
+    safety_field: SafetyFieldParams | None = None
     name_required_in_config: ClassVar[bool] = False  # the reference's agent configs have none
 
     def __post_init__(self) -> None:
@@ -55,6 +59,9 @@ class AgentSpawnParams(SimObjectSpawnParams):
             )
         if isinstance(self.ik_params, dict):
             self.ik_params = dataclass_from_dict(IKParams, self.ik_params, section="ik_params")
+        self.safety_field = SafetyFieldParams.coerce(
+            self.safety_field, "AgentSpawnParams.safety_field"
+        )
         if self.plugins is not None and not (
             isinstance(self.plugins, list) and all(isinstance(e, dict) for e in self.plugins)
         ):

@@ -107,6 +107,19 @@ class FleetMotion:
             limits = replace(limits, max_linear_vel=capped)
         self.engine.set_limits(agent.motion_slot, limits)
 
+    def set_time_scale(self, scale_of_row: Any) -> None:
+        """Hold (0) or slow (< 1) path following, per store row, in the next step (see
+        ``KinematicEngine.set_time_scale``); None drives every agent as planned."""
+        self.engine.set_time_scale(scale_of_row)
+
+    def path_rows(self) -> Any:
+        """Store rows of the agents following a path on a built-in controller (an array)."""
+        return self.engine.path_rows()
+
+    def segment_directions(self) -> Any:
+        """(store rows, unit xy directions) of the agents driving a path segment now."""
+        return self.engine.segment_directions()
+
     def remove_slot(self, slot: int) -> None:
         """Release an engine slot."""
         self._slot_agent.pop(slot, None)

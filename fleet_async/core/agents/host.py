@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
     from fleet_async.core.agents.fleet import FleetMotion
     from fleet_async.core.base.params import SimulationParams
+    from fleet_async.core.collision.safety import SafetyFields
     from fleet_async.core.motion.joints import JointMotion
     from fleet_async.core.world.state import KinematicState
 
@@ -52,6 +53,9 @@ class AgentHost(BodyHost, MotionHost, ActionHost, MissionHost, Protocol):
 
     @property
     def joint_motion(self) -> JointMotion[Agent]: ...
+
+    @property
+    def safety(self) -> SafetyFields: ...
 
     @property
     def in_step(self) -> bool: ...

@@ -78,6 +78,16 @@ class SimEvents:
     MISSION_FAILED = "mission_failed"
     """A mission ended with an exception (not a cancellation), emitted by the mission runtime
     when it ends; payload ``sim``, ``mission`` (its name), ``error``."""
+    SAFETY_STOP_STARTED = "safety_stop_started"
+    """Something entered an agent's protective field: it stops in this step, its action stays
+    active; payload ``sim``, ``agent``, ``obstacles`` (the objects in the field; a map's
+    walls are not objects)."""
+    SAFETY_STOP_ENDED = "safety_stop_ended"
+    """An agent's protective field cleared (or its path ended): it drives on; payload ``sim``,
+    ``agent``, ``duration`` (s stopped)."""
+    DEADLOCK_SUSPECTED = "deadlock_suspected"
+    """A set of agents, each stopped by another member in its protective field, has lasted
+    ``sim.safety.deadlock_after`` seconds; payload ``sim``, ``agents``, ``sim_time``."""
 
     @classmethod
     def all(cls) -> tuple[str, ...]:

@@ -28,6 +28,7 @@ import numpy as np
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.metrics.rows import FleetKpis, RobotKpis
+from fleet_async.core.metrics.traffic import TrafficCounts
 
 if sys.version_info < (3, 11):  # anyio depends on the backport there
     from exceptiongroup import BaseExceptionGroup
@@ -134,6 +135,7 @@ class KpiCollector:
         self._actions = [0, 0, 0]
         self._collisions = 0
         self._mission_errors = 0
+        self._traffic = TrafficCounts(sim)
         self._errors_seen: list[BaseException] = []
         self._robots: list[_Robot] = []
         self._by_id: dict[int, _Robot] = {}  # id(agent) -> robot, while it is in the sim
@@ -185,6 +187,7 @@ class KpiCollector:
         if self._stopped:
             return
         self._stopped = True
+        self._traffic.freeze()
         for event, (handler, _) in self._handlers.items():
             self._sim.events.off(event, handler)
         self._sim.remove_step_observer(self._on_step)
@@ -245,6 +248,9 @@ class KpiCollector:
             battery_min_soc=min(r.battery_soc for r in batteries if r.battery_soc is not None)
             if batteries
             else None,
+            safety_stops=sum(r.safety_stops for r in robots),
+            safety_stopped_time_total_s=math.fsum(r.safety_stopped_time_s for r in robots),
+            deadlocks_suspected=self._traffic.deadlocks(),
         )
 
     def per_robot(self) -> list[RobotKpis]:
@@ -442,6 +448,8 @@ class KpiCollector:
             collisions=robot.collisions,
             battery_used=used,
             battery_soc=soc,
+            safety_stops=self._traffic.robot(robot.object_id)[0],
+            safety_stopped_time_s=self._traffic.robot(robot.object_id)[1],
         )
 
 

@@ -44,6 +44,9 @@ class FleetKpis:
     battery_used_total: float | None
     battery_used_mean: float | None
     battery_min_soc: float | None
+    safety_stops: int = 0
+    safety_stopped_time_total_s: float = 0.0
+    deadlocks_suspected: int = 0
 
     @classmethod
     def columns(cls) -> list[str]:
@@ -73,6 +76,8 @@ class RobotKpis:
     collisions: int
     battery_used: float | None
     battery_soc: float | None
+    safety_stops: int = 0
+    safety_stopped_time_s: float = 0.0
 
     @classmethod
     def columns(cls) -> list[str]:

@@ -27,6 +27,8 @@ from fleet_async.core.actions.pick_drop import DropAction, PickAction
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.waypoints import Path
 from fleet_async.core.missions.errors import ExternallyDrivenError
+from fleet_async.core.routes.api import graph_of
+from fleet_async.core.routes.follow import route_to_node
 
 if TYPE_CHECKING:
     from fleet_async.core.missions.host import MissionAgent
@@ -112,6 +114,12 @@ class AgentMissionApi:
             path = list(path)  # MoveAction names what it got when this is not Poses
         action = MoveAction(path=path, **options)  # type: ignore[arg-type]  # takes a Pose too
         return self.submit(action, detached=detached, what="agent.move")
+
+    def go_to_node(self, node_id: str, *, detached: bool = False) -> Any:
+        """Drive the quickest route of the simulation's route graph from the nearest node to
+        ``node_id``, each edge at its speed limit (``routes/follow.py``)."""
+        action = route_to_node(self, graph_of(self), node_id)
+        return self.submit(action, detached=detached, what="agent.go_to_node")
 
     def pick(self, target: Any = None, *, detached: bool = False, **options: Any) -> Any:
         """Pick ``target`` (a SimObject or body id), or pass PickAction options such as

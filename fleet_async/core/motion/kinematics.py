@@ -432,7 +432,7 @@ class KinematicEngine(SlotTable):
         # few dozen numpy calls, so each one saved counts.
         f = self._move_block.take(s, axis=1)  # (columns, slots): f[AT[name]] is one column
         store = self._store
-        steps = f[AT["steps"]] + 1.0
+        steps = f[AT["steps"]] + (1.0 if self._scale is None else self._scale[s])
         # The step in which the profile's end falls is the arrival step (t_arrive: t_end less
         # the float error of k * dt, so that 14 steps of 0.1 s cover a 1.4 s segment).
         elapsed = steps * dt

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fleet_async.core.motion.segments import EPS_LEN as _EPS_LEN
 from fleet_async.core.motion.segments import PROFILE_TERMS, profile_terms
 
 __all__ = [
@@ -141,6 +142,7 @@ class SlotTable:
         self._high = 0  # slots below this have been used
         self._floats = np.zeros((_WIDTH, 0))  # column-major: one row of the matrix per column
         self._moving: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._scale: np.ndarray | None = None  # per slot: time scale of this step (fields)
 
     def _alloc(self, cap: int) -> None:
         floats = np.zeros((_WIDTH, cap))
@@ -159,6 +161,7 @@ class SlotTable:
                 new[: len(old)] = old
             setattr(self, name, new)
         self._moving = None
+        self._scale = None  # the next step's scale is set again (set_time_scale)
 
     def _set_mode(self, slot: int, mode: int) -> None:
         """Change a slot's mode (and forget the cached sets of moving slots if it changed)."""
@@ -177,6 +180,37 @@ class SlotTable:
             rows = self.row[pose]
             self._moving = (pose, rows, flat_rows(rows), (mode == VELOCITY).nonzero()[0])
         return self._moving
+
+    def path_rows(self) -> np.ndarray:
+        """Store rows of the slots following a path (POSE mode), ascending by slot."""
+        return self._moving_slots()[1]
+
+    def segment_directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """(store rows, (K, 2) unit ground-plane directions) of the path-following slots whose
+        current segment moves them (turns in place have none)."""
+        pose, rows, _, _ = self._moving_slots()
+        d = self.dp[pose, :2]
+        norm = np.hypot(d[:, 0], d[:, 1])
+        keep = norm > _EPS_LEN
+        return rows[keep], d[keep] / norm[keep, None]
+
+    def set_time_scale(self, scale_of_row: np.ndarray | None) -> None:
+        """Scale the next step's progress along each slot's path by its store row's entry.
+
+        0 holds a slot where it is (its path and profile wait, to resume from where they
+        stopped), 0.5 drives it at half its speed; None (the default) drives every slot as
+        planned. Set before each step by the safety fields (``collision/safety.py``);
+        velocity commands are not scaled.
+
+        Args:
+            scale_of_row: (rows,) floats indexed by store row, covering every slot's row.
+        """
+        if scale_of_row is None:
+            self._scale = None
+            return
+        rows = self.row  # every slot's, so a slot added during the step has an entry
+        known = (rows >= 0) & (rows < len(scale_of_row))
+        self._scale = np.where(known, scale_of_row[np.where(known, rows, 0)], 1.0)
 
     def _derive(self, slot: int) -> None:
         """Work out a slot's derived columns (``_DERIVED``) from its segment's columns."""

@@ -9,6 +9,7 @@ nested layout is recognised by any of these sections, applied in this order:
 - ``managers``: ``[{name, type: agent | sim_object, <constructor options>}]``, registered with the
   simulation (``sim.get_manager(name)``).
 - ``world``: handed to ``sim.load_world(world, base_dir=...)``.
+- ``traffic``: route graph, grid maps, deadlock time (``scenario/traffic.py``).
 - ``entities``: entity mappings, see :meth:`ScenarioApi.spawn_robots_from_config`.
 - ``plugins``: ``[{type: registered name | class: dotted.path, config: {...}, frequency: Hz}]``.
 - ``missions``: ``["module:function" | {function, args, kwargs, name}]``, async functions that
@@ -54,6 +55,7 @@ from fleet_async.core.scenario.errors import (
     where_prefix,
 )
 from fleet_async.core.scenario.missions import MissionSpec, parse_missions
+from fleet_async.core.scenario.traffic import apply_traffic
 from fleet_async.core.sim.plugins import SimPlugin
 
 if TYPE_CHECKING:
@@ -84,6 +86,7 @@ SCENARIO_SECTIONS = (
     "missions",
     "trace",
     "serve",
+    "traffic",
 )
 """Top-level sections of the nested layout."""
 
@@ -253,6 +256,8 @@ def _build(
         if world:
             with config_context(where, "world"):
                 sim.load_world(world, base_dir=base_dir)
+        if config.get("traffic") is not None:
+            apply_traffic(sim, config["traffic"], where, base_dir)
         spawn_entities(sim, entities, where, base_dir, declared)
         _refuse_duplicate_names(sim, where)
         for label, cls, plugin_config, frequency in plugins:

@@ -5,13 +5,15 @@ phases in order, each a call into the module that owns it:
 
 1. ``events_pre_step``  - PRE_STEP event.
 2. ``callbacks``        - simulation callbacks, plugins and per-object callbacks that are due.
-3. ``agent_update``     - PRE_UPDATE, motion systems and overridden ``update(dt)``, POST_UPDATE.
-4. ``attachments``      - attached objects follow their parent links.
-5. ``pose_flush``       - push the step's poses to PyBullet (only with physics, the GUI or
+3. ``safety_fields``    - agents' safety fields hold or slow them (``collision/safety.py``;
+   free while no agent has fields).
+4. ``agent_update``     - PRE_UPDATE, motion systems and overridden ``update(dt)``, POST_UPDATE.
+5. ``attachments``      - attached objects follow their parent links.
+6. ``pose_flush``       - push the step's poses to PyBullet (only with physics, the GUI or
    ``sync_pybullet_every_step``; otherwise PyBullet is synced lazily).
-6. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
-7. ``collision_check``  - the collision pipeline, when due (``collision/``).
-8. ``events_post_step`` - the clock advances, POST_STEP event, step observers (then, with
+7. ``step_simulation``  - PyBullet dynamics (only present when ``physics=True``).
+8. ``collision_check``  - the collision pipeline, when due (``collision/``).
+9. ``events_post_step`` - the clock advances, POST_STEP event, step observers (then, with
    ``sync_pybullet_every_step``, what its handlers wrote is pushed too).
 
 Profiling (``return_profiling``, ``profiling.py``) runs the same phases through a timer.
@@ -35,6 +37,7 @@ from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.scheduling import PeriodicSchedule
 from fleet_async.core.collision.api import CollisionApi
+from fleet_async.core.collision.safety import SafetyFields
 from fleet_async.core.collision.system import CollisionSystem
 from fleet_async.core.missions.mission_api import SimEventBus, SimMissionApi
 from fleet_async.core.motion.joints import JointMotion
@@ -109,6 +112,7 @@ class SimulationKernel(
         )
         self._fleet = FleetMotion(self)
         self._collision = CollisionSystem(self, self._push_dirty)
+        self._safety = SafetyFields(self, self._collision, self._fleet)
         self._callbacks = PeriodicSchedule()
         self._plugin_schedule = PeriodicSchedule()
         self._plugins: list[SimPlugin] = []
@@ -145,6 +149,7 @@ class SimulationKernel(
         self._phases: tuple[tuple[str, Callable[[], None]], ...] = (
             ("events_pre_step", self._phase_pre_step),
             ("callbacks", self._phase_callbacks),
+            ("safety_fields", self._safety.run),
             ("agent_update", self._phase_motion),
             ("attachments", self._world.attachments.follow_all),
             *((("pose_flush", self.sync_pybullet),) if flush else ()),
@@ -169,6 +174,11 @@ class SimulationKernel(
     def fleet(self) -> FleetMotion:
         """Agents' motion: the kinematic engine, action queues and per-agent controllers."""
         return self._fleet
+
+    @property
+    def safety(self) -> SafetyFields:
+        """Agents' safety fields: who has them, who is stopped, deadlock settings."""
+        return self._safety
 
     @property
     def action_time(self) -> float:
@@ -322,8 +332,8 @@ class SimulationKernel(
                 ``agent_update``, ``callbacks``, ``step_simulation``, ``collision_check``,
                 ``collision_breakdown`` when the collision check ran, ``events_pre_step``,
                 ``events_post_step``, ``events_collision``, ``monitor_update``, ``total``),
-                fleet_async's ``attachments``, and fields added by ``record_profiling``
-                (see ``sim/profiling.py``).
+                fleet_async's ``attachments`` and ``safety_fields``, and fields added by
+                ``record_profiling`` (see ``sim/profiling.py``).
 
         Returns:
             The timings when ``return_profiling`` is set, else None.
@@ -463,6 +473,7 @@ class SimulationKernel(
         self._joint_motion.reset()
         removed = self._world.clear()
         self._collision.reset()
+        self._safety.reset()
         for manager in self._managers:
             manager.clear()
         self._backend.reset_world()

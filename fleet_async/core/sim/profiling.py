@@ -15,7 +15,7 @@ onto fleet_async's phases:
 - ``monitor_update``: always 0 here, since the monitor is updated by ``run_simulation``
   around the step, not inside it;
 - ``agent_update``, ``callbacks``, ``collision_check``, ``events_pre_step``,
-  ``events_post_step``, ``total``; and fleet_async's own ``attachments``.
+  ``events_post_step``, ``total``; and fleet_async's own ``attachments`` and ``safety_fields``.
 
 Fields recorded with ``record_profiling`` are added, summed within the step.
 """
@@ -117,6 +117,7 @@ def reference_timings(
         "phase3_aabb_grid_flush": 0.0 if collision is None else collision["get_aabbs"],
         "agent_update": measured["agent_update"],
         "attachments": measured["attachments"],
+        "safety_fields": measured.get("safety_fields", 0.0),
         "callbacks": measured["callbacks"],
         "step_simulation": measured.get("step_simulation", 0.0),
         "collision_check": measured["collision_check"],

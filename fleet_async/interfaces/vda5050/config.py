@@ -99,6 +99,9 @@ class Vda5050Config:
         series_name: The factsheet's seriesName (default: the robot's model or name).
         map_id: The vehicles' map: an order on another mapId is refused (orderError); None
             takes any mapId and reports the one of the last order's nodes ("map" before any).
+        route_graph: A ``RouteGraph`` whose node ids orders may name without a nodePosition
+            (the node's position, heading and map are taken from the graph); None: the served
+            simulation's ``route_graph`` when it has one.
 
     Raises:
         ValueError: naming the field and the value.
@@ -113,6 +116,7 @@ class Vda5050Config:
     epoch: float | None = None
     series_name: str | None = None
     map_id: str | None = None
+    route_graph: Any = None
 
     def __post_init__(self) -> None:
         if self.version not in SUPPORTED_VERSIONS:
@@ -177,7 +181,7 @@ class Vda5050Config:
         Raises:
             ValueError: naming ``where``, the key and the value.
         """
-        names = set(cls.__dataclass_fields__)
+        names = set(cls.__dataclass_fields__) - {"route_graph"}  # the scenario's own graph
         unknown = sorted(set(data) - names)
         if unknown:
             raise ValueError(f"{where}: unknown key(s) {unknown}; valid: {sorted(names)}")

@@ -165,14 +165,21 @@ def _order(data: Mapping[str, Any], config: Vda5050Config) -> Command:
                     f"order {data['orderId']!r}: edge {edge['edgeId']!r} has a {key}: {why}",
                     (*order_refs, ("edge_id", str(edge["edgeId"])), ("field", key)),
                 )
+    graph = config.route_graph
+    named = []
     for node in data["nodes"]:
         if not node.get("nodePosition"):
-            return Rejection(
-                "order",
-                f"order {data['orderId']!r}: node {node['nodeId']!r} has no nodePosition "
-                "(a simulated vehicle drives by coordinates)",
-                (*order_refs, ("node_id", str(node["nodeId"])), ("field", "nodePosition")),
-            )
+            known = graph.nodes.get(str(node["nodeId"])) if graph is not None else None
+            if known is None:
+                where = "" if graph is None else " and the route graph has no such node"
+                return Rejection(
+                    "order",
+                    f"order {data['orderId']!r}: node {node['nodeId']!r} has no nodePosition"
+                    f"{where} (a simulated vehicle drives by coordinates)",
+                    (*order_refs, ("node_id", str(node["nodeId"])), ("field", "nodePosition")),
+                )
+            node = {**node, "nodePosition": _graph_position(known)}
+        named.append(node)
         map_id = node["nodePosition"].get("mapId")
         if config.map_id is not None and map_id != config.map_id:
             return Rejection(
@@ -181,9 +188,17 @@ def _order(data: Mapping[str, Any], config: Vda5050Config) -> Command:
                 f"this vehicle has map {config.map_id!r}",
                 (*order_refs, ("node_id", str(node["nodeId"])), ("field", "mapId")),
             )
-    nodes = sorted((_node(n) for n in data["nodes"]), key=lambda n: n.sequence)
+    nodes = sorted((_node(n) for n in named), key=lambda n: n.sequence)
     edges = sorted((_edge(e) for e in data["edges"]), key=lambda e: e.sequence)
     return Order(str(data["orderId"]), int(data["orderUpdateId"]), tuple(nodes), tuple(edges))
+
+
+def _graph_position(node: Any) -> dict[str, Any]:
+    """A nodePosition from a route graph's node (its map, its heading when it has one)."""
+    pos: dict[str, Any] = {"x": node.x, "y": node.y, "mapId": node.map_id or ""}
+    if node.theta is not None:
+        pos["theta"] = node.theta
+    return pos
 
 
 def _number(value: Any) -> float | None:

@@ -146,7 +146,7 @@ def state(
             for e in snap.errors
         ],
         "information": [],
-        "safetyState": {"eStop": "NONE", "fieldViolation": False},
+        "safetyState": {"eStop": "NONE", "fieldViolation": snap.field_violation},
     }
 
 

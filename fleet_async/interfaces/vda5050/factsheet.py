@@ -105,6 +105,33 @@ def _limit(value: Any) -> float:
     return float(max(value)) if isinstance(value, (tuple, list)) else float(value)
 
 
+def _geometry(robot: Any, length: float, width: float, vmax: float) -> dict[str, Any]:
+    """``agvGeometry``: the safety fields as ``envelopes2d`` (vehicle frame, x ahead), at
+    standstill and at full speed; ``{}`` for a robot without fields."""
+    fields = robot.sim_core.safety.params_of(robot)
+    if fields is None:
+        return {}
+    if fields.footprint is not None:
+        length, width = fields.footprint
+    front, side = 0.5 * length, 0.5 * width + fields.side_margin
+    envelopes = []
+    for name, depth_at in (
+        ("protectiveField", fields.protective_depth),
+        ("warningField", fields.warning_depth),
+    ):
+        for speed_name, speed in (("standstill", 0.0), ("maxSpeed", vmax)):
+            depth = depth_at(speed)
+            points = [(front, -side), (front + depth, -side), (front + depth, side), (front, side)]
+            envelopes.append(
+                {
+                    "set": f"{name}_{speed_name}",
+                    "polygonPoints": [{"x": round(x, 6), "y": round(y, 6)} for x, y in points],
+                    "description": f"{name} at {speed:g} m/s, ahead in the direction of travel",
+                }
+            )
+    return {"envelopes2d": envelopes}
+
+
 def describe(robot: Any, config: Vda5050Config) -> dict[str, Any]:
     """The factsheet body (without the header) of ``robot``."""
     params = robot.controller_params
@@ -149,6 +176,6 @@ def describe(robot: Any, config: Vda5050Config) -> dict[str, Any]:
             "optionalParameters": [],
             "agvActions": _actions(config.version),
         },
-        "agvGeometry": {},
+        "agvGeometry": _geometry(robot, length, width, _limit(params.max_linear_vel)),
         "loadSpecification": {},
     }

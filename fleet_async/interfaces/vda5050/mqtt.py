@@ -14,6 +14,7 @@ would have published is counted as dropped.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import ssl
@@ -123,6 +124,9 @@ class MqttTransport:
             raise ModuleNotFoundError(_EXTRA_MISSING) from exc
         self.fleet = fleet
         self.config = config if config is not None else Vda5050Config()
+        graph = getattr(fleet.sim, "route_graph", None)
+        if self.config.route_graph is None and graph is not None:  # orders may name its nodes
+            self.config = dataclasses.replace(self.config, route_graph=graph)
         address = BrokerAddress.parse(broker)
         if username is not None:
             address = BrokerAddress(address.host, address.port, address.tls, username, password)

@@ -1,0 +1,328 @@
+"""Safety fields for the whole fleet: stop in the protective field, slow in the warning field.
+
+Runs once per step as the ``safety_fields`` phase, just before the motion phase, on the poses
+the previous step left. For every agent with fields (``SafetyFieldParams``) that follows a path
+and drives or is about to drive a segment (or is stopped by its field), the fields are laid
+ahead of its footprint along its direction of travel (its velocity; standing, the segment it
+is to drive) and sized by the speed it drives at (``safety_geometry.py``). One box per object
+enters the collision broad phase (``broadphase.candidate_pairs``): each fielded robot's AABB
+grown over its warning field (marked moved), every other object's AABB, a map's obstacle
+boxes; the candidate pairs are then tested exactly (a rectangle against a box). Per robot:
+
+- something in the protective field: the robot does not move in this step (the engine's time
+  scale is 0 for it: its path and profile wait, its action stays active);
+  ``safety_stop_started`` is emitted when it begins. A stopped robot's fields have their
+  standstill depth, so it creeps up to an obstacle further away than its margin;
+- the field clears (or the robot's path ends or is cancelled): ``safety_stop_ended``, and the
+  robot drives on from where it stopped, its time scale ramping up so that it speeds up at its
+  field's ``deceleration``;
+- something in the warning field only: the robot drives at ``slow_factor`` of its speed.
+
+What is not an obstacle: the robot itself, what it carries (its attachments), anything
+entirely below 2 cm (``safety_state.py``) above the robot's base or above its top (the floor, a
+shelf it drives under). Velocity commands and custom controllers are not stopped.
+Stopped robots that hold each other are watched for deadlocks (``safety_deadlock.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+from fleet_async.core.base.events import SimEvents
+from fleet_async.core.collision.broadphase import auto_cell_size, candidate_pairs
+from fleet_async.core.collision.safety_deadlock import DeadlockWatch, blocked_sets
+from fleet_async.core.collision.safety_geometry import FieldShapes, rect_hits_box
+from fleet_async.core.collision.safety_params import SafetyFieldParams
+from fleet_async.core.collision.safety_state import FieldTable
+
+if TYPE_CHECKING:
+    from fleet_async.core.collision.system import CollisionSystem
+    from fleet_async.core.world.world import World
+
+__all__ = ["FieldMotion", "SafetyFields"]
+
+
+_MULTI_CELL = 16.0  # cells a box may span per axis and still be hashed (a field is long)
+
+
+class FieldMotion(Protocol):
+    """What the fields need of the agents' motion (``agents/fleet.py``)."""
+
+    def path_rows(self) -> np.ndarray: ...
+
+    def segment_directions(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def set_time_scale(self, scale_of_row: Any) -> None: ...
+
+
+class SafetyHost(Protocol):
+    """The simulation, as the safety fields see it."""
+
+    @property
+    def world(self) -> World: ...
+
+    @property
+    def events(self) -> Any: ...
+
+    @property
+    def step_count(self) -> int: ...
+
+    @property
+    def sim_time(self) -> float: ...
+
+    @property
+    def params(self) -> Any: ...
+
+
+class SafetyFields:
+    """The safety fields of one simulation (``sim.safety``).
+
+    Args:
+        sim: The simulation.
+        collision: Its collision system (AABBs and the broad phase's settings).
+        motion: The agents' motion (who follows a path; holding and slowing).
+    """
+
+    def __init__(self, sim: SafetyHost, collision: CollisionSystem, motion: FieldMotion) -> None:
+        self._sim = sim
+        self._collision = collision
+        self._motion = motion
+        self._table = FieldTable(sim.world.store)
+        self._watch = DeadlockWatch()
+        self._static_lo = np.zeros((0, 3))
+        self._static_hi = np.zeros((0, 3))
+        self._transparent: set[int] = set()  # object ids the fields ignore (map bodies)
+        self._cell: float | None = None
+        self._cell_n = 0  # boxes the cell size was chosen for
+        self._layout = -1
+        self.recorder: Callable[..., None] | None = None
+        """Called ``recorder(kind, object_id, **data)`` for each stop, end and deadlock (the
+        simulation points it at ``sim.trace_event``, so a running trace logs them)."""
+
+    # ----- agents -------------------------------------------------------------------------
+
+    def enable(self, agent: Any, params: SafetyFieldParams | dict[str, Any] | bool = True) -> None:
+        """Give ``agent`` safety fields (replacing any it has).
+
+        Raises:
+            ValueError: for bad parameters, or an agent not in this simulation.
+        """
+        prm = SafetyFieldParams.coerce(params, "safety_field")
+        if self._sim.world.get(agent.object_id) is not agent:
+            raise ValueError(f"safety fields: {agent!r} is not in this simulation")
+        if prm is None:
+            self.disable(agent)
+            return
+        self._table.add(agent, prm)
+
+    def disable(self, agent: Any) -> bool:
+        """Take ``agent``'s fields away (it resumes if stopped); return whether it had some."""
+        row = self._table.remove(agent.object_id)
+        return row is not None
+
+    def params_of(self, agent: Any) -> SafetyFieldParams | None:
+        """``agent``'s field parameters, or None when it has no fields."""
+        return self._table.params_of(agent.object_id)
+
+    def is_stopped(self, agent: Any) -> bool:
+        """Whether ``agent`` is stopped by its protective field."""
+        return self._table.is_held(agent.object_id)
+
+    def stopped_agents(self) -> list[Any]:
+        """Agents stopped by their protective fields, in object-id order."""
+        return self._table.held_agents()
+
+    def field_violation(self, agent: Any) -> bool:
+        """Whether something is in ``agent``'s protective field now (VDA 5050's
+        ``safetyState.fieldViolation``)."""
+        return self.is_stopped(agent)
+
+    @property
+    def enabled(self) -> bool:
+        """Whether any agent has fields (otherwise the phase costs nothing)."""
+        return len(self._table) > 0
+
+    @property
+    def deadlock_after(self) -> float:
+        """Seconds a blocked set of robots must last before ``deadlock_suspected`` (10 s)."""
+        return self._watch.deadlock_after
+
+    @deadlock_after.setter
+    def deadlock_after(self, value: float) -> None:
+        self._watch.deadlock_after = value
+
+    @property
+    def deadlocks_suspected(self) -> int:
+        """``deadlock_suspected`` events so far."""
+        return self._watch.count
+
+    def stats(self) -> dict[int, tuple[int, float]]:
+        """``{object_id: (stops, time stopped in s)}`` of every agent that had fields."""
+        dt = self._sim.params.timestep
+        return {oid: (stops, steps * dt) for oid, (stops, steps) in self._table.stats().items()}
+
+    # ----- static obstacles ---------------------------------------------------------------
+
+    def add_static_boxes(
+        self, lo: np.ndarray, hi: np.ndarray, replaces: list[Any] | None = None
+    ) -> None:
+        """Add obstacle boxes that are not objects' AABBs (a map's occupied cells).
+
+        Args:
+            lo, hi: (K, 3) corners (m, world frame).
+            replaces: Objects whose own AABBs the fields ignore, as these boxes stand for
+                their geometry (a map's merged bodies, whose AABBs cover the whole map).
+        """
+        lo = np.asarray(lo, dtype=float).reshape(-1, 3)
+        hi = np.asarray(hi, dtype=float).reshape(-1, 3)
+        if lo.shape != hi.shape:
+            raise ValueError(f"add_static_boxes: {lo.shape} minima for {hi.shape} maxima")
+        self._static_lo = np.concatenate((self._static_lo, lo))
+        self._static_hi = np.concatenate((self._static_hi, hi))
+        self._transparent |= {obj.object_id for obj in replaces or ()}
+        self._cell = None
+
+    def field_corners(self, agent: Any, warning: bool = False) -> list[tuple[float, float]]:
+        """The corners (m, world frame) of ``agent``'s protective (or warning) field now, for
+        drawing; [] when it has no field in force (standing, or without fields)."""
+        return self._table.corners(agent.object_id, warning)
+
+    # ----- the phase ----------------------------------------------------------------------
+
+    def reset(self) -> None:
+        """Forget every agent and box (simulation reset)."""
+        self._table.clear()
+        self._watch.reset()
+        self._static_lo = np.zeros((0, 3))
+        self._static_hi = np.zeros((0, 3))
+        self._transparent.clear()
+        self._cell = None
+        self._motion.set_time_scale(None)
+
+    def run(self) -> None:
+        """The ``safety_fields`` phase: evaluate every field, hold and slow robots, emit."""
+        table = self._table
+        if not len(table) and not table.had_scale:
+            return
+        store = self._sim.world.store
+        if store.layout_version != self._layout:  # an agent with fields may have left
+            self._layout = store.layout_version
+            table.prune(self._sim.world)
+        table.sync(self._collision)
+        on_path = np.zeros(store.capacity, dtype=bool)
+        on_path[self._motion.path_rows()] = True
+        seg_rows, seg_dirs = self._motion.segment_directions()
+        heading = np.zeros((store.capacity, 2))
+        heading[seg_rows] = seg_dirs
+        shapes, active = table.shapes(on_path, heading)
+        hits = self._hits(shapes, active) if np.count_nonzero(active) else None
+        scale = table.settle(
+            active, hits, self._sim.step_count, self._emit, self._sim.params.timestep, self._objects
+        )
+        self._motion.set_time_scale(scale)
+        if table.held_count >= 2:
+            self._watch_deadlocks()
+
+    def _hits(
+        self, shapes: FieldShapes, active: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(owner index, obstacle row or -1 for a static box, in protective, in warning) of
+        every obstacle in an active field."""
+        table, collision = self._table, self._collision
+        rows = collision.prepare_rows()
+        lo, hi = collision.geometry.unpadded(rows) if len(rows) else (np.zeros((0, 3)),) * 2
+        if self._transparent:
+            keep = ~np.isin(self._sim.world.store.object_id[rows], list(self._transparent))
+            rows, lo, hi = rows[keep], lo[keep], hi[keep]
+        n_obj = len(rows)
+        box_lo = np.concatenate((lo, self._static_lo))
+        box_hi = np.concatenate((hi, self._static_hi))
+        n_box = len(box_lo)
+        owners = active.nonzero()[0]
+        f_lo, f_hi = shapes.bounds(table.warning_depth)
+        f_lo, f_hi = f_lo[owners], f_hi[owners]
+        z_lo, z_hi = table.z_band(owners)
+        # An owner's own box grows to cover its field (one box per robot, not two); owners
+        # without collision geometry get a box of their own after the obstacles'.
+        at = np.searchsorted(rows, table.rows[owners])
+        own = at < n_obj
+        own[own] = rows[at[own]] == table.rows[owners][own]
+        place = np.where(own, at, n_box + np.cumsum(~own) - 1)
+        extra = int(np.count_nonzero(~own))
+        all_lo = np.concatenate((box_lo, np.zeros((extra, 3))))
+        all_hi = np.concatenate((box_hi, np.zeros((extra, 3))))
+        field_lo = np.column_stack((f_lo, z_lo))
+        field_hi = np.column_stack((f_hi, z_hi))
+        all_lo[place] = np.where(own[:, None], np.minimum(all_lo[place], field_lo), field_lo)
+        all_hi[place] = np.where(own[:, None], np.maximum(all_hi[place], field_hi), field_hi)
+        moved = np.zeros(len(all_lo), dtype=bool)
+        moved[place] = True
+        owner_of = np.full(len(all_lo), -1, dtype=np.int64)
+        owner_of[place] = owners
+        if self._cell is None or not (0.5 * self._cell_n <= n_box <= 2 * self._cell_n):
+            self._cell = auto_cell_size(box_lo, box_hi) if n_box else 1.0
+            self._cell_n = n_box
+        pairs = candidate_pairs(all_lo, all_hi, None, moved, self._cell, _MULTI_CELL)
+        # Each pair is tested both ways: field of one side's owner vs the other side's box.
+        a, b = pairs[:, 0], pairs[:, 1]
+        ab = (owner_of[a] >= 0) & (b < n_box)
+        ba = (owner_of[b] >= 0) & (a < n_box)
+        field = np.concatenate((a[ab], b[ba]))
+        obstacle = np.concatenate((b[ab], a[ba]))
+        owner = owner_of[field]
+        zi = np.searchsorted(owners, owner)
+        obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)
+        keep = obstacle_row != table.rows[owner]
+        keep &= (box_hi[obstacle, 2] >= z_lo[zi]) & (box_lo[obstacle, 2] <= z_hi[zi])
+        keep &= table.not_carried(owner, obstacle_row, self._sim.world)
+        owner, obstacle, obstacle_row = owner[keep], obstacle[keep], obstacle_row[keep]
+        # The protective field lies inside the warning field: test it only where that hit.
+        u, w, half_w = shapes.u[owner], shapes.w[owner], shapes.half_w[owner]
+        b_lo, b_hi = box_lo[obstacle, :2], box_hi[obstacle, :2]
+        c_warn, h_warn = shapes.rect(table.warning_depth, owner)
+        warn = rect_hits_box(c_warn, u, w, h_warn, half_w, b_lo, b_hi)
+        owner, obstacle_row = owner[warn], obstacle_row[warn]
+        c_prot, h_prot = shapes.rect(table.protective_depth, owner)
+        prot = rect_hits_box(c_prot, u[warn], w[warn], h_prot, half_w[warn], b_lo[warn], b_hi[warn])
+        return owner, obstacle_row, prot, np.ones(len(owner), dtype=bool)
+
+    def _objects(self, rows: list[int]) -> list[Any]:
+        world = self._sim.world
+        ids = world.store.object_id[rows].tolist() if rows else []
+        return [obj for obj in (world.get(i) for i in ids) if obj is not None]
+
+    def _emit(self, kind: str, agent: Any, **data: Any) -> None:
+        sim = self._sim
+        if sim.events.has_handlers(kind):
+            sim.events.emit(kind, sim=sim, agent=agent, **data)
+        if self.recorder is not None:
+            self.recorder(kind, agent.object_id, **_plain(data))
+
+    def _watch_deadlocks(self) -> None:
+        sim = self._sim
+        sets = blocked_sets(self._table.held_by())
+        due = self._watch.update(sets, sim.step_count, sim.params.timestep)
+        for members in due:
+            robots = self._table.agents_at(sorted(members))
+            names = [a.name or f"#{a.object_id}" for a in robots]
+            if sim.events.has_handlers(SimEvents.DEADLOCK_SUSPECTED):
+                sim.events.emit(
+                    SimEvents.DEADLOCK_SUSPECTED, sim=sim, agents=robots, sim_time=sim.sim_time
+                )
+            if self.recorder is not None:
+                ids = [a.object_id for a in robots]
+                self.recorder(SimEvents.DEADLOCK_SUSPECTED, None, robots=ids, names=names)
+
+
+def _plain(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with objects replaced by their ids (for the trace's JSON event log)."""
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        if key == "obstacles":
+            out[key] = [getattr(o, "object_id", o) for o in value]
+        elif key != "sim":
+            out[key] = value
+    return out

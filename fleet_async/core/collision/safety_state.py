@@ -1,0 +1,321 @@
+"""FieldTable: the agents with safety fields, their parameters and stop state, as arrays.
+
+One entry per agent with fields, kept in arrays indexed by the entry's place (rebuilt when an
+agent gains or loses its fields, carrying each agent's state over). ``safety.py`` runs the
+phase on it; this module knows nothing of the broad phase.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from fleet_async.core.base.events import SimEvents
+from fleet_async.core.collision.safety_geometry import FieldShapes, heading_of
+from fleet_async.core.collision.safety_params import SafetyFieldParams
+
+if TYPE_CHECKING:
+    from fleet_async.core.collision.system import CollisionSystem
+    from fleet_async.core.world.state import KinematicState
+    from fleet_async.core.world.world import World
+
+__all__ = ["FieldTable"]
+
+_MOVING = 1e-6  # m/s: slower than this a robot has no direction of travel
+_CLEARANCE = 0.02  # m above the robot's lowest point where its fields begin
+_MIN_RAMP_SPEED = 0.05  # m/s: a slower plan ramps its time scale as if it drove at this
+_NO_AABB_HEIGHT = 1.0  # m: the field's height for a robot without collision geometry
+
+Emit = Callable[..., None]
+
+
+class _Entry:
+    __slots__ = ("agent", "dir", "held", "params", "since", "speed", "steps", "stops")
+
+    def __init__(self, agent: Any, params: SafetyFieldParams) -> None:
+        self.agent = agent
+        self.params = params
+        self.held = False
+        self.speed = 0.0
+        self.dir = (1.0, 0.0)
+        self.since = 0
+        self.stops = 0
+        self.steps = 0
+
+
+class FieldTable:
+    """The field agents of one simulation and their state.
+
+    Args:
+        store: The simulation's state store.
+    """
+
+    def __init__(self, store: KinematicState) -> None:
+        self._store = store
+        self._entries: dict[int, _Entry] = {}
+        self._retired: dict[int, tuple[int, int]] = {}  # removed agents' (stops, steps)
+        self._stale = True
+        self._shapes: FieldShapes | None = None
+        self._active = np.zeros(0, dtype=bool)
+        self.had_scale = False
+        """Whether the last step held or slowed someone (so the next must reset the scale)."""
+        self._build([])
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    # ----- membership ---------------------------------------------------------------------
+
+    def add(self, agent: Any, params: SafetyFieldParams) -> None:
+        self._save()
+        old = self._entries.get(agent.object_id)
+        entry = _Entry(agent, params)
+        if old is not None:
+            entry.stops, entry.steps = old.stops, old.steps
+        self._entries[agent.object_id] = entry
+        self._stale = True
+
+    def remove(self, object_id: int) -> int | None:
+        """Drop an agent's entry; return its row, or None if it had none."""
+        self._save()
+        entry = self._entries.pop(object_id, None)
+        if entry is None:
+            return None
+        self._retired[object_id] = (entry.stops, entry.steps)
+        self._stale = True
+        return int(entry.agent.state_row)
+
+    def clear(self) -> None:
+        self._entries.clear()
+        self._retired.clear()
+        self._stale = True
+        self.had_scale = False
+
+    def prune(self, world: World) -> None:
+        """Drop the entries of agents no longer in ``world`` (removed ones)."""
+        for oid, entry in list(self._entries.items()):
+            if world.get(oid) is not entry.agent:
+                self.remove(oid)
+
+    def params_of(self, object_id: int) -> SafetyFieldParams | None:
+        entry = self._entries.get(object_id)
+        return None if entry is None else entry.params
+
+    def is_held(self, object_id: int) -> bool:
+        i = self._index.get(object_id)
+        return bool(self.held[i]) if i is not None and not self._stale else False
+
+    def held_agents(self) -> list[Any]:
+        if self._stale:
+            return []
+        return [self._agents[i] for i in self.held.nonzero()[0].tolist()]
+
+    @property
+    def held_count(self) -> int:
+        return 0 if self._stale else int(np.count_nonzero(self.held))
+
+    def stats(self) -> dict[int, tuple[int, int]]:
+        """``{object_id: (stops, steps stopped)}``, removed agents included."""
+        self._save()
+        out = dict(self._retired)
+        out.update({oid: (e.stops, e.steps) for oid, e in self._entries.items()})
+        return dict(sorted(out.items()))
+
+    # ----- arrays -------------------------------------------------------------------------
+
+    def _save(self) -> None:
+        """Write the arrays' per-agent state back to the entries (before a rebuild)."""
+        if self._stale:
+            return
+        for i, agent in enumerate(self._agents):
+            entry = self._entries.get(agent.object_id)
+            if entry is not None:
+                entry.held = bool(self.held[i])
+                entry.speed = float(self.held_speed[i])
+                entry.dir = (float(self.held_dir[i, 0]), float(self.held_dir[i, 1]))
+                entry.since = int(self.since[i])
+                entry.stops = int(self.stops[i])
+                entry.steps = int(self.steps[i])
+
+    def _build(self, entries: list[_Entry]) -> None:
+        self._agents = [e.agent for e in entries]
+        self._index = {a.object_id: i for i, a in enumerate(self._agents)}
+        self.rows = np.array([a.state_row for a in self._agents], dtype=np.int64)
+        self._row_index = {int(r): i for i, r in enumerate(self.rows.tolist())}
+        prm = [e.params for e in entries]
+
+        def col(name: str) -> np.ndarray:
+            return np.array([getattr(p, name) for p in prm], dtype=float)
+
+        self.decel, self.margin_p = col("deceleration"), col("protective_margin")
+        self.margin_w, self.side = col("warning_margin"), col("side_margin")
+        self.slow = col("slow_factor")
+        fp = [p.footprint if p.footprint is not None else (np.nan, np.nan) for p in prm]
+        self.half = 0.5 * np.array(fp, dtype=float).reshape(-1, 2)
+        self.z_off = np.tile([0.0, _NO_AABB_HEIGHT], (len(prm), 1))
+        self.resolved = np.array([p.footprint is not None for p in prm], dtype=bool)
+        self.held = np.array([e.held for e in entries], dtype=bool)
+        self.held_speed = np.array([e.speed for e in entries], dtype=float)
+        self.held_dir = np.array([e.dir for e in entries], dtype=float).reshape(-1, 2)
+        self.since = np.array([e.since for e in entries], dtype=np.int64)
+        self.stops = np.array([e.stops for e in entries], dtype=np.int64)
+        self.steps = np.array([e.steps for e in entries], dtype=np.int64)
+        self.last_scale = np.ones(len(prm))
+        self.protective_depth = np.zeros(len(prm))
+        self.warning_depth = np.zeros(len(prm))
+        self._blockers: dict[int, set[int]] = {}
+        self._shapes = None
+        self._active = np.zeros(len(prm), dtype=bool)
+        self.speed = np.zeros(len(prm))
+        self._z_known = np.zeros(len(prm), dtype=bool)
+
+    def sync(self, collision: CollisionSystem) -> None:
+        """Rebuild after membership changes; take footprints and heights from collision boxes."""
+        if self._stale:
+            self._build(list(self._entries.values()))
+            self._stale = False
+        todo = (~self._z_known).nonzero()[0]
+        if not len(todo):
+            return
+        part = collision.prepare_rows()
+        rows = self.rows[todo]
+        has = np.isin(rows, part)
+        if np.count_nonzero(has):
+            idx, r = todo[has], rows[has]
+            lo, hi = collision.geometry.unpadded(r)
+            pos = self._store.position[r]
+            self.z_off[idx, 0] = lo[:, 2] - pos[:, 2]
+            self.z_off[idx, 1] = hi[:, 2] - pos[:, 2]
+            fill = idx[~self.resolved[idx]]
+            sel = ~self.resolved[idx]
+            self.half[fill] = 0.5 * (hi[sel, :2] - lo[sel, :2])
+        self.half[np.isnan(self.half)] = 0.0
+        self.resolved[:] = True
+        self._z_known[todo] = True
+
+    def z_band(self, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(bottom, top) (m) of the fields of entries ``owners``."""
+        z = self._store.position[self.rows[owners], 2]
+        return z + self.z_off[owners, 0] + _CLEARANCE, z + self.z_off[owners, 1]
+
+    def shapes(self, on_path: np.ndarray, segment: np.ndarray) -> tuple[FieldShapes, np.ndarray]:
+        """This step's field shapes and which entries have a field in force.
+
+        Args:
+            on_path: (capacity,) whether each store row follows a path.
+            segment: (capacity, 2) unit direction of each row's current path segment, zero
+                where it has none (standing, turning in place).
+        """
+        store, rows, held = self._store, self.rows, self.held
+        vel = store.velocity[rows, :2]
+        speed = np.hypot(vel[:, 0], vel[:, 1])
+        moving = speed > _MOVING
+        # Where a robot drives: along its velocity; standing (stopped, or about to start a
+        # segment), along the segment it is to drive (a new path turns a stopped robot's
+        # fields with it); else the way it was going when it stopped.
+        seg = segment[rows]
+        has_seg = np.any(seg != 0.0, axis=1)
+        active = on_path[rows] & (moving | held | has_seg)
+        standing = np.where(has_seg[:, None], seg, self.held_dir)
+        travel = np.where(moving[:, None], vel / np.where(moving, speed, 1.0)[:, None], standing)
+        travel[~(moving | held | has_seg)] = (1.0, 0.0)
+        # The speed the robot's path is planned at (its actual speed undoes last step's scale;
+        # a stopped robot resumes at the speed it stopped at), and the speed it drives at now,
+        # which sizes the fields: a stopped robot's fields are their standstill depth.
+        last = self.last_scale
+        self.speed = np.where(held, self.held_speed, speed / np.where(last > 0, last, 1.0))
+        self.protective_depth = speed * speed / (2.0 * self.decel) + self.margin_p
+        self.warning_depth = self.protective_depth + self.margin_w
+        heading = heading_of(store.orientation[rows])
+        shapes = FieldShapes(
+            store.position[rows, :2], heading, travel, self.half[:, 0], self.half[:, 1], self.side
+        )
+        self._shapes, self._active = shapes, active
+        return shapes, active
+
+    def not_carried(self, owner: np.ndarray, obstacle_row: np.ndarray, world: World) -> np.ndarray:
+        """Mask of pairs whose obstacle is not carried by (attached below) the field's owner."""
+        keep = np.ones(len(owner), dtype=bool)
+        if not len(world.attachments) or not len(owner):
+            return keep
+        parents = world.attachments.parent_ids()
+        for i in np.unique(owner).tolist():
+            agent = self._agents[i]
+            if agent.object_id in parents:
+                carried = [d.state_row for d in world.attachments.descendants(agent)]
+                keep &= ~((owner == i) & np.isin(obstacle_row, carried))
+        return keep
+
+    # ----- the outcome --------------------------------------------------------------------
+
+    def settle(
+        self,
+        active: np.ndarray,
+        hits: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None,
+        step: int,
+        emit: Emit,
+        dt: float,
+        objects: Callable[[list[int]], list[Any]],
+    ) -> np.ndarray | None:
+        """Hold, slow or release every entry; emit stops and ends; return the time scale by
+        store row (None: nobody held or slowed)."""
+        m = len(self.rows)
+        prot_any = np.zeros(m, dtype=bool)
+        warn_any = np.zeros(m, dtype=bool)
+        self._blockers = {}
+        if hits is not None:
+            owner, obstacle_row, prot, warn = hits
+            prot_any[owner[prot]] = True
+            warn_any[owner[warn]] = True
+            for i, r in zip(owner[prot].tolist(), obstacle_row[prot].tolist(), strict=True):
+                self._blockers.setdefault(i, set()).add(r)
+        held_now = active & prot_any
+        started = (held_now & ~self.held).nonzero()[0]
+        ended = (self.held & ~held_now).nonzero()[0]
+        if len(started):
+            self.held_speed[started] = self.speed[started]
+            self.held_dir[started] = self._shapes.u[started] if self._shapes is not None else 0.0
+            self.since[started] = step
+            self.stops[started] += 1
+        self.held = held_now
+        self.steps[held_now] += 1
+        for i in ended.tolist():
+            duration = (step - int(self.since[i])) * dt
+            emit(SimEvents.SAFETY_STOP_ENDED, self._agents[i], duration=duration)
+        for i in started.tolist():
+            blockers = sorted(r for r in self._blockers.get(i, ()) if r >= 0)
+            emit(SimEvents.SAFETY_STOP_STARTED, self._agents[i], obstacles=objects(blockers))
+        # Stopping and slowing take effect at once; speeding up again (after a stop or a slow
+        # down) ramps the time scale so that the robot accelerates at its ``deceleration``.
+        target = np.where(held_now, 0.0, np.where(warn_any & active, self.slow, 1.0))
+        last = self.last_scale
+        ramp = dt * self.decel / np.maximum(self.speed, _MIN_RAMP_SPEED)
+        scale = np.where(target < last, target, np.minimum(target, last + ramp))
+        self.last_scale = scale
+        if np.all(scale == 1.0):
+            self.had_scale = False
+            return None
+        self.had_scale = True
+        out = np.ones(self._store.capacity)
+        out[self.rows] = scale
+        return out
+
+    def held_by(self) -> dict[int, set[int]]:
+        """``{row of a stopped entry: rows of stopped entries in its protective field}``."""
+        held_rows = set(self.rows[self.held].tolist())
+        return {
+            int(self.rows[i]): self._blockers.get(i, set()) & held_rows
+            for i in self.held.nonzero()[0].tolist()
+        }
+
+    def agents_at(self, rows: list[int]) -> list[Any]:
+        return [self._agents[self._row_index[r]] for r in rows]
+
+    def corners(self, object_id: int, warning: bool) -> list[tuple[float, float]]:
+        i = self._index.get(object_id)
+        if i is None or self._stale or self._shapes is None or not self._active[i]:
+            return []
+        depth = self.warning_depth if warning else self.protective_depth
+        return self._shapes.corners(i, float(depth[i]))

@@ -1,0 +1,62 @@
+"""``sim.load_map(path)``: a map_server occupancy grid or a MovingAI map as static geometry.
+
+Mixed into ``MultiRobotSimulationCore``; the maps loaded are kept in ``sim.maps``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from fleet_async.core.maps.readers import read_map_server, read_movingai_map
+from fleet_async.core.maps.world import GridMap, add_grid_map
+
+__all__ = ["MapsApi"]
+
+
+class MapsApi:
+    """``sim.load_map`` and ``sim.maps`` (mixed into the simulation)."""
+
+    _maps: list[GridMap] | None = None
+
+    @property
+    def maps(self) -> list[GridMap]:
+        """The grid maps loaded, in order."""
+        return list(self._maps or [])
+
+    def load_map(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        resolution: float = 1.0,
+        height: float = 1.0,
+        tile: float = 10.0,
+    ) -> GridMap:
+        """Load a map_server YAML map (``.yaml`` / ``.yml``) or a MovingAI ``.map`` as static
+        obstacles (``maps/world.py``).
+
+        Args:
+            path: The map file.
+            resolution: Cell edge (m) of a MovingAI map (map_server maps state their own).
+            height: Height of the obstacles (m).
+            tile: Edge of the tiles (m) whose obstacles share a body.
+
+        Raises:
+            FileNotFoundError: for a missing file.
+            ValueError: for an unknown kind of file or a malformed map, naming the file.
+        """
+        source = Path(path)
+        if not source.is_file():
+            raise FileNotFoundError(f"load_map: no file {source.resolve()}")
+        suffix = source.suffix.lower()
+        if suffix in (".yaml", ".yml"):
+            grid = read_map_server(source)
+        elif suffix == ".map":
+            grid = read_movingai_map(source, resolution)
+        else:
+            raise ValueError(
+                f"load_map: {source}: expected a map_server .yaml or a MovingAI .map file"
+            )
+        loaded = add_grid_map(self, grid, height=height, tile=tile, name=source.stem)
+        self._maps = [*(self._maps or []), loaded]
+        return loaded
