@@ -18,6 +18,7 @@ waits that hold the simulation clock (or break determinism). Use ``sim.sleep`` a
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Awaitable, Callable, Iterable
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -28,6 +29,8 @@ if TYPE_CHECKING:
     from fleet_async.core.actions.action import Action
 
 __all__ = ["MissionRuntime", "SimEventBus", "SimMissionApi"]
+
+logger = logging.getLogger(__name__)
 
 
 class MissionRuntime(Protocol):
@@ -110,6 +113,17 @@ class SimMissionApi:
         waiting), in start order; empty when none are."""
         runtime = self._mission_runtime
         return [] if runtime is None else runtime.mission_names()
+
+    def end_missions_before_close(self) -> None:
+        """``end_missions()`` as the simulation closes: their cleanup runs now; a failure
+        of it is logged, so that closing goes on."""
+        runtime = self._mission_runtime
+        if runtime is None or runtime.driving:
+            return
+        try:
+            runtime.end()
+        except Exception:
+            logger.exception("a mission failed while ending with its simulation")
 
     def end_missions(self) -> None:
         """End the missions left waiting by ``fleet_async.run(..., until=t)``: each is

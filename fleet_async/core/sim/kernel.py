@@ -485,13 +485,10 @@ class SimulationKernel(
             plugin.on_reset()
 
     def close(self) -> None:
-        """End the missions a run left suspended (their cleanup runs now), then disconnect
-        from PyBullet; the simulation cannot step afterwards."""
+        """End the missions a run left suspended, then disconnect from PyBullet; the
+        simulation cannot step afterwards."""
         try:
-            if self.mission_runtime is not None and not self.mission_runtime.driving:
-                self.end_missions()
-        except Exception:  # a mission's cleanup failed: still close
-            logger.exception("a mission failed while ending with its simulation")
+            self.end_missions_before_close()
         finally:
             self._memory.stop()
             self._backend.disconnect()
