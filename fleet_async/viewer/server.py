@@ -1,8 +1,8 @@
 """A small local HTTP server for the viewer page and one trace (standard library only).
 
 Routes: ``/`` the page, its scripts (``/trace.js`` ``/palette.js`` ``/timeline.js``
-``/panel.js`` ``/vehicle.js`` ``/render.js`` ``/viewer.js``) and ``/viewer.css`` (package data
-in ``static/``), ``/trace`` the trace file, streamed in chunks. With
+``/panel.js`` ``/vehicle.js`` ``/traffic.js`` ``/render.js`` ``/viewer.js``) and
+``/viewer.css`` (package data in ``static/``), ``/trace`` the trace file, streamed in chunks. With
 ``follow=True`` (a run in progress, ``fleet-async run --view``) ``/trace`` keeps streaming what
 the writer appends until the trace's end record has been sent, so the page shows a live run;
 when the file stops growing for ``stale_after`` seconds without its end record, the server says
@@ -43,6 +43,7 @@ _ASSETS = {
     "/timeline.js": "text/javascript",
     "/panel.js": "text/javascript",
     "/vehicle.js": "text/javascript",
+    "/traffic.js": "text/javascript",
     "/render.js": "text/javascript",
     "/viewer.js": "text/javascript",
     "/viewer.css": "text/css",

@@ -299,7 +299,11 @@ class SafetyFields:
         if sim.events.has_handlers(kind):
             sim.events.emit(kind, sim=sim, agent=agent, **data)
         if self.recorder is not None:
-            self.recorder(kind, agent.object_id, **_plain(data))
+            extra: dict[str, Any] = {}
+            if kind == SimEvents.SAFETY_STOP_STARTED:  # the fields that stopped it, to draw
+                extra["protective"] = _rounded(self.field_corners(agent))
+                extra["warning"] = _rounded(self.field_corners(agent, warning=True))
+            self.recorder(kind, agent.object_id, **_plain(data), **extra)
 
     def _watch_deadlocks(self) -> None:
         sim = self._sim
@@ -326,3 +330,8 @@ def _plain(data: dict[str, Any]) -> dict[str, Any]:
         elif key != "sim":
             out[key] = value
     return out
+
+
+def _rounded(corners: list[tuple[float, float]]) -> list[list[float]]:
+    """Field corners as ``[[x, y], ...]`` rounded to mm (a small trace event)."""
+    return [[round(float(x), 3), round(float(y), 3)] for x, y in corners]

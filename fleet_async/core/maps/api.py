@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 from fleet_async.core.maps.readers import read_map_server, read_movingai_map
 from fleet_async.core.maps.world import GridMap, add_grid_map
@@ -59,4 +60,18 @@ class MapsApi:
             )
         loaded = add_grid_map(self, grid, height=height, tile=tile, name=source.stem)
         self._maps = [*(self._maps or []), loaded]
+        trace_event = getattr(self, "trace_event", None)
+        if trace_event is not None:  # a running trace draws it (docs/trace-format.md)
+            trace_event("map_loaded", None, **loaded.trace_data())
         return loaded
+
+    def trace_scenery(self) -> list[tuple[str, dict[str, Any]]]:
+        """The ``map_loaded`` and ``route_graph`` events a trace starts with (the maps loaded
+        and the route graph in use), as ``(kind, data)``."""
+        events: list[tuple[str, dict[str, Any]]] = [
+            ("map_loaded", m.trace_data()) for m in self._maps or []
+        ]
+        graph = getattr(self, "route_graph", None)
+        if graph is not None:
+            events.append(("route_graph", graph.trace_data()))
+        return events

@@ -41,6 +41,14 @@ class GridMap:
     lo: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     hi: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
+    def trace_data(self) -> dict[str, Any]:
+        """The map for the trace's ``map_loaded`` event: ``name``, ``rects`` (its obstacle
+        boxes seen from above, ``[x0, y0, x1, y1]`` in m, world frame) and ``bodies`` (the
+        object ids of its tile bodies, which the viewer draws as these rectangles)."""
+        rects = np.round(np.column_stack((self.lo[:, :2], self.hi[:, :2])), 4).tolist()
+        name = (self.bodies[0].name or "map").rsplit("[", 1)[0] if self.bodies else "map"
+        return {"name": name, "rects": rects, "bodies": [b.object_id for b in self.bodies]}
+
     def free_cells(self) -> np.ndarray:
         """(K, 2) (row, col) of every free cell, row by row."""
         return np.argwhere(~self.grid.occupied)

@@ -35,6 +35,7 @@ class RoutesApi:
         if graph is not None and not isinstance(graph, RouteGraph):
             raise TypeError(f"set_route_graph: expected a RouteGraph or None, got {graph!r}")
         self._route_graph = graph
+        self._trace_graph(graph)
 
     def load_route_graph(
         self,
@@ -46,7 +47,15 @@ class RoutesApi:
         """Load a YAML graph or a LIF layout (``routes/loaders.py``) and use it; return it."""
         graph = load_route_graph(source, layout_id=layout_id, vehicle_type=vehicle_type)
         self._route_graph = graph
+        self._trace_graph(graph)
         return graph
+
+    def _trace_graph(self, graph: RouteGraph | None) -> None:
+        """Log the graph now in use in a running trace (``route_graph``; no nodes: none)."""
+        trace_event = getattr(self, "trace_event", None)
+        if trace_event is not None:
+            data = graph.trace_data() if graph is not None else {"nodes": [], "edges": []}
+            trace_event("route_graph", None, **data)
 
 
 def graph_of(agent: Any) -> RouteGraph:

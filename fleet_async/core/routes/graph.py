@@ -84,6 +84,13 @@ class RouteGraph:
 
     # ----- building -------------------------------------------------------------------------
 
+    def trace_data(self) -> dict[str, Any]:
+        """The graph for the trace's ``route_graph`` event: ``nodes`` as ``[id, x, y]`` (m,
+        rounded to mm) and directed ``edges`` as ``[id, start, end]``."""
+        nodes = [[n.node_id, round(n.x, 3), round(n.y, 3)] for n in self.nodes.values()]
+        edges = [[e.edge_id, e.start, e.end] for e in self.edges.values()]
+        return {"nodes": nodes, "edges": edges}
+
     def add_node(self, node: RouteNode) -> RouteNode:
         """Add ``node``.
 

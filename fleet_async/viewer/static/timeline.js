@@ -54,7 +54,7 @@ class Timeline {
       } else if (e.kind === "task_completed" || e.kind === "task_failed") {
         instants.push({ kind: "task", t: e.t, step: e.step, task: x.task, text: `${x.task} ${e.kind === "task_completed" ? "done" : "failed"}`, failed: e.kind === "task_failed" });
       } else if (e.kind === "safety_stop_started") {
-        safety = { kind: "safety", t0: e.t, s0: e.step, t1: null, s1: end, text: `safety stop${x.reason ? ": " + x.reason : ""}` };
+        safety = { kind: "safety", t0: e.t, s0: e.step, t1: null, s1: end, protective: x.protective, warning: x.warning, text: `safety stop${x.reason ? ": " + x.reason : ""}` };
         spans.push(safety);
       } else if (e.kind === "safety_stop_ended") {
         if (safety) { safety.t1 = e.t; safety.s1 = e.step; safety = null; }

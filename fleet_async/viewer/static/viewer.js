@@ -18,6 +18,7 @@
   const data = new TraceData(traceName);
   const decoder = new TraceDecoder(data);
   const timeline = new Timeline(data);
+  const traffic = new TrafficLayer(data);  // maps, route graph, safety fields (traffic.js)
   const stage = $("stage"), grid = $("grid"), gl = $("gl"), overlay = $("overlay");
   // WebGL2 only on request or on a hardware GPU: software WebGL is far slower than the
   // Canvas2D pixel renderer at fleet sizes (see render.js).
@@ -144,9 +145,9 @@
 
   function staticScene() {
     const list = [];
-    for (const b of data.bodies.values()) if (b.kind === "static" && b.pose) list.push(b);
-    if (list.length === staticsCount) return statics;
-    staticsCount = list.length;
+    for (const b of data.bodies.values()) if (b.kind === "static" && b.pose && !traffic.isMapBody(b.id)) list.push(b);
+    if (list.length + 1e6 * traffic.mapBodies.size === staticsCount) return statics;
+    staticsCount = list.length + 1e6 * traffic.mapBodies.size;
     const n = list.length;
     const pos = new Float32Array(3 * n), yaw = new Int16Array(n), flags = new Uint8Array(n);
     list.forEach((b, i) => {
@@ -256,7 +257,7 @@
     const f0 = i >= 0 ? data.frames[i] : null;
     const f1 = i >= 0 && i + 1 < data.frames.length ? data.frames[i + 1] : null;
     const alpha = f0 && f1 ? Math.min(Math.max((clock.t - f0.t) / (f1.t - f0.t || 1), 0), 1) : 0;
-    if (!debug.skipGrid) drawGrid();
+    if (!debug.skipGrid) { drawGrid(); traffic.drawScenery(grid.getContext("2d"), project, view, f0 ? f0.step : null); }
     if (!debug.skipGL) renderer.draw(view, {
       statics: staticScene(), frame0: f0, frame1: f1, alpha, zrange: zrange(), colorMode: ui.colorMode, layoutBodies, activity,
     });
@@ -361,6 +362,7 @@
     const ctx = overlay.getContext("2d"), dpr = view.dpr;
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     ctx.clearRect(0, 0, view.width, view.height);
+    traffic.drawn.fields = null;
     const groups = f0 ? stackedRobots(f0) : [];
     app.dataset.stacked = String(groups.length);
     if (groups.length) {
@@ -383,6 +385,7 @@
       const span = timeline.activityAt(ui.selected, f0.step).span;
       const target = span && span.object !== undefined ? bodyPose(f0, f1, alpha, span.object) : null;
       drawnGoal = drawGoal(ctx, project, pose, span, target);
+      traffic.drawFields(ctx, project, traffic.stopAt(timeline, ui.selected, f0.step));
     }
     const b = data.bodies.get(ui.selected);
     const s = b && b.shapeInfo;
@@ -548,6 +551,8 @@
     displayName: (id) => displayName(data, id),
     legend: () => legendItems(data, ui.colorMode).map((it) => it.text),
     goal: () => (drawnGoal ? JSON.parse(JSON.stringify(drawnGoal)) : null),
+    // What traffic.js drew last: map rectangles, graph nodes and edges, the selection's fields.
+    traffic: () => JSON.parse(JSON.stringify(traffic.drawn)),
     state: () => ({ simTime: clock.t, frame: frameIndex(), frames: data.frames.length, playing: clock.playing, selected: ui.selected, error: ui.error, done: ui.done, bodies: data.bodies.size, renderer: renderer.kind, view: { ...view } }),
     stats: () => ({ frames: stats.frames, times: stats.times.slice(), drawMs: stats.drawMs.slice() }),
     resetStats: () => { stats.frames = 0; stats.times.length = 0; stats.drawMs.length = 0; },

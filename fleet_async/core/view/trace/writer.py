@@ -170,6 +170,9 @@ class TraceWriter:
         )
         self._new_bodies = list(sim.sim_objects)
         self._log.hook()
+        scenery = getattr(sim, "trace_scenery", None)  # maps and the route graph (viewer)
+        for kind, data in scenery() if scenery is not None else ():
+            self._log.event(kind, None, **data)
         for event, handler in self._handlers:
             sim.events.on(event, handler)
         # Called after every POST_STEP handler, so a frame shows what they did this step.
