@@ -31,9 +31,11 @@ def _no_browser(reason: str) -> None:
     pytest.skip(reason)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser_page() -> Iterator[Any]:
-    """One headless Chromium page for the session (tests navigate it)."""
+    """One headless Chromium page per test module (tests navigate it). Per module, not per
+    session: the sync API keeps its event loop running on this thread while open, and tests
+    that run missions (anyio.run) after the viewer tests could not start theirs."""
     try:
         import playwright.sync_api  # noqa: F401  # only checking that it is installed
     except ImportError:
