@@ -329,19 +329,25 @@ async def test_interrupt_errors(fleet_sim):
 # ----- run(until=...) -------------------------------------------------------------------------
 
 
+def _ticker(sim, log):
+    """A mission that logs a tick every sim second and its cleanup."""
+
+    async def ticker():
+        try:
+            while True:
+                await sim.sleep(1)
+                log.append((sim.now, "tick"))
+        finally:
+            log.append((sim.now, "cleanup"))
+
+    return ticker
+
+
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_until_stops_before_the_events_due_then_and_cleanup_runs_then(backend):
     with _sim(dt=1.0) as sim:
         log = []
-
-        async def ticker():
-            try:
-                while True:
-                    await sim.sleep(1)
-                    log.append((sim.now, "tick"))
-            finally:
-                log.append((sim.now, "cleanup"))
-
+        ticker = _ticker(sim, log)
         assert fa.run(sim, ticker, until=3.0, then="cancel", backend=backend) is None
         assert log == [(1.0, "tick"), (2.0, "tick"), (3.0, "cleanup")]
         assert sim.sim_time == 3.0
@@ -353,15 +359,7 @@ def test_until_suspends_and_the_next_run_continues_the_same_missions(backend):
     """SimPy's run(until=t): the missions stay where they wait; run(until=t2) goes on."""
     with _sim(dt=1.0) as sim:
         log = []
-
-        async def ticker():
-            try:
-                while True:
-                    await sim.sleep(1)
-                    log.append((sim.now, "tick"))
-            finally:
-                log.append((sim.now, "cleanup"))
-
+        ticker = _ticker(sim, log)
         assert fa.run(sim, ticker, until=3.0, backend=backend) is None
         assert log == [(1.0, "tick"), (2.0, "tick")]  # the tick due at 3.0 waits for the next
         assert sim.sim_time == 3.0 and sim.suspended_missions() == ["ticker"]
