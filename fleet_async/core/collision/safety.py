@@ -4,10 +4,11 @@ Runs once per step as the ``safety_fields`` phase, just before the motion phase,
 the previous step left. For every agent with fields (``SafetyFieldParams``) that follows a path
 and drives or is about to drive a segment (or is stopped by its field), the fields are laid
 ahead of its footprint along its direction of travel (its velocity; standing, the segment it
-is to drive) and sized by the speed it drives at (``safety_geometry.py``). One box per object
-enters the collision broad phase (``broadphase.candidate_pairs``): each fielded robot's AABB
-grown over its warning field (marked moved), every other object's AABB, a map's obstacle
-boxes; the candidate pairs are then tested exactly (a rectangle against a box). Per robot:
+is to drive) and sized by the speed it drives at (``safety_geometry.py``). Which obstacle may
+stand in which field (other objects' AABBs, a map's obstacle boxes) comes from a pair list
+kept between steps (``safety_join.py``); the listed pairs are then tested exactly (a rectangle
+against a box). ``safety_reference.py`` keeps the first, slower evaluation (the collision broad
+phase every step), which gives the same results. Per robot:
 
 - something in the protective field: the robot does not move in this step (the engine's time
   scale is 0 for it: its path and profile wait, its action stays active);
@@ -32,10 +33,11 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from fleet_async.core.base.events import SimEvents
-from fleet_async.core.collision.broadphase import auto_cell_size, candidate_pairs
 from fleet_async.core.collision.safety_deadlock import DeadlockWatch, blocked_sets
 from fleet_async.core.collision.safety_geometry import FieldShapes, rect_hits_box
+from fleet_async.core.collision.safety_join import AHEAD, FieldPairs
 from fleet_async.core.collision.safety_params import SafetyFieldParams
+from fleet_async.core.collision.safety_reference import Hits, reference_hits
 from fleet_async.core.collision.safety_state import FieldTable
 
 if TYPE_CHECKING:
@@ -45,7 +47,7 @@ if TYPE_CHECKING:
 __all__ = ["FieldMotion", "SafetyFields"]
 
 
-_MULTI_CELL = 16.0  # cells a box may span per axis and still be hashed (a field is long)
+_TOL = 1e-9  # m: the x / y cut before the exact test keeps boxes this far apart
 
 
 class FieldMotion(Protocol):
@@ -95,9 +97,14 @@ class SafetyFields:
         self._static_lo = np.zeros((0, 3))
         self._static_hi = np.zeros((0, 3))
         self._transparent: set[int] = set()  # object ids the fields ignore (map bodies)
-        self._cell: float | None = None
-        self._cell_n = 0  # boxes the cell size was chosen for
+        self._static_version = 0
+        self._opaque: tuple[np.ndarray, np.ndarray] | None = None  # (rows, not transparent)
+        self._join = FieldPairs()
         self._layout = -1
+        self.evaluator = "pairs"
+        """How fields are evaluated: ``"pairs"`` (the pair list kept between steps,
+        ``safety_join.py``) or ``"reference"`` (the generic broad phase every step,
+        ``safety_reference.py``; slow, for tests). Both give the same results."""
         self.recorder: Callable[..., None] | None = None
         """Called ``recorder(kind, object_id, **data)`` for each stop, end and deadlock (the
         simulation points it at ``sim.trace_event``, so a running trace logs them)."""
@@ -183,7 +190,8 @@ class SafetyFields:
         self._static_lo = np.concatenate((self._static_lo, lo))
         self._static_hi = np.concatenate((self._static_hi, hi))
         self._transparent |= {obj.object_id for obj in replaces or ()}
-        self._cell = None
+        self._static_version += 1
+        self._opaque = None
 
     def field_corners(self, agent: Any, warning: bool = False) -> list[tuple[float, float]]:
         """The corners (m, world frame) of ``agent``'s protective (or warning) field now, for
@@ -199,7 +207,9 @@ class SafetyFields:
         self._static_lo = np.zeros((0, 3))
         self._static_hi = np.zeros((0, 3))
         self._transparent.clear()
-        self._cell = None
+        self._static_version += 1
+        self._opaque = None
+        self._join.invalidate()
         self._motion.set_time_scale(None)
 
     def run(self) -> None:
@@ -226,62 +236,65 @@ class SafetyFields:
         if table.held_count >= 2:
             self._watch_deadlocks()
 
-    def _hits(
-        self, shapes: FieldShapes, active: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(owner index, obstacle row or -1 for a static box, in protective, in warning) of
-        every obstacle in an active field."""
-        table, collision = self._table, self._collision
+    def _hits(self, shapes: FieldShapes, active: np.ndarray) -> Hits:
+        """Every obstacle in an active field (see ``safety_join.py``)."""
+        table, collision, world = self._table, self._collision, self._sim.world
+        if self.evaluator == "reference":
+            static = (self._static_lo, self._static_hi)
+            return reference_hits(
+                table, collision, world, static, self._transparent, shapes, active
+            )
+        store = world.store
         rows = collision.prepare_rows()
         lo, hi = collision.geometry.unpadded(rows) if len(rows) else (np.zeros((0, 3)),) * 2
         if self._transparent:
-            keep = ~np.isin(self._sim.world.store.object_id[rows], list(self._transparent))
+            if self._opaque is None or self._opaque[0] is not rows:
+                ids = store.object_id[rows]
+                self._opaque = (rows, ~np.isin(ids, list(self._transparent)))
+            keep = self._opaque[1]
             rows, lo, hi = rows[keep], lo[keep], hi[keep]
         n_obj = len(rows)
-        box_lo = np.concatenate((lo, self._static_lo))
-        box_hi = np.concatenate((hi, self._static_hi))
-        n_box = len(box_lo)
-        owners = active.nonzero()[0]
         f_lo, f_hi = shapes.bounds(table.warning_depth)
-        f_lo, f_hi = f_lo[owners], f_hi[owners]
-        z_lo, z_hi = table.z_band(owners)
-        # An owner's own box grows to cover its field (one box per robot, not two); owners
-        # without collision geometry get a box of their own after the obstacles'.
-        at = np.searchsorted(rows, table.rows[owners])
-        own = at < n_obj
-        own[own] = rows[at[own]] == table.rows[owners][own]
-        place = np.where(own, at, n_box + np.cumsum(~own) - 1)
-        extra = int(np.count_nonzero(~own))
-        all_lo = np.concatenate((box_lo, np.zeros((extra, 3))))
-        all_hi = np.concatenate((box_hi, np.zeros((extra, 3))))
-        field_lo = np.column_stack((f_lo, z_lo))
-        field_hi = np.column_stack((f_hi, z_hi))
-        all_lo[place] = np.where(own[:, None], np.minimum(all_lo[place], field_lo), field_lo)
-        all_hi[place] = np.where(own[:, None], np.maximum(all_hi[place], field_hi), field_hi)
-        moved = np.zeros(len(all_lo), dtype=bool)
-        moved[place] = True
-        owner_of = np.full(len(all_lo), -1, dtype=np.int64)
-        owner_of[place] = owners
-        if self._cell is None or not (0.5 * self._cell_n <= n_box <= 2 * self._cell_n):
-            self._cell = auto_cell_size(box_lo, box_hi) if n_box else 1.0
-            self._cell_n = n_box
-        pairs = candidate_pairs(all_lo, all_hi, None, moved, self._cell, _MULTI_CELL)
-        # Each pair is tested both ways: field of one side's owner vs the other side's box.
-        a, b = pairs[:, 0], pairs[:, 1]
-        ab = (owner_of[a] >= 0) & (b < n_box)
-        ba = (owner_of[b] >= 0) & (a < n_box)
-        field = np.concatenate((a[ab], b[ba]))
-        obstacle = np.concatenate((b[ab], a[ba]))
-        owner = owner_of[field]
-        zi = np.searchsorted(owners, owner)
+        everyone = np.arange(len(table.rows))
+        z_lo, z_hi = table.z_band(everyone)
+        at = np.minimum(np.searchsorted(rows, table.rows), max(n_obj - 1, 0))
+        own = np.where(rows[at] == table.rows, at, -1) if n_obj else np.full(len(at), -1)
+        ahead = AHEAD * self._sim.params.timestep
+        self._join.update(
+            (len(self._static_lo), self._static_version),
+            table.rows,
+            (np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))),
+            store.velocity[table.rows] * ahead,
+            rows,
+            (lo, hi),
+            store.velocity[rows] * ahead,
+            (self._static_lo, self._static_hi),
+            own,
+        )
+        owner, obstacle = self._join.field, self._join.obstacle
+        sel = active[owner]
+        owner, obstacle = owner[sel], obstacle[sel]
+        box_lo = np.concatenate((lo, self._static_lo)) if len(self._static_lo) else lo
+        box_hi = np.concatenate((hi, self._static_hi)) if len(self._static_hi) else hi
+        # Boxes apart in x or y cannot touch the field (a cheap cut before the exact test;
+        # the tolerance keeps every pair that test could pass).
+        b_lo, b_hi = box_lo[obstacle], box_hi[obstacle]
+        keep = (f_lo[owner, 0] - _TOL <= b_hi[:, 0]) & (b_lo[:, 0] <= f_hi[owner, 0] + _TOL)
+        keep &= (f_lo[owner, 1] - _TOL <= b_hi[:, 1]) & (b_lo[:, 1] <= f_hi[owner, 1] + _TOL)
+        keep &= (b_hi[:, 2] >= z_lo[owner]) & (b_lo[:, 2] <= z_hi[owner])
+        owner, obstacle, b_lo, b_hi = owner[keep], obstacle[keep], b_lo[keep], b_hi[keep]
         obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)
-        keep = obstacle_row != table.rows[owner]
-        keep &= (box_hi[obstacle, 2] >= z_lo[zi]) & (box_lo[obstacle, 2] <= z_hi[zi])
-        keep &= table.not_carried(owner, obstacle_row, self._sim.world)
-        owner, obstacle, obstacle_row = owner[keep], obstacle[keep], obstacle_row[keep]
+        keep = table.not_carried(owner, obstacle_row, world)
+        if not keep.all():
+            owner, obstacle_row, b_lo, b_hi = (
+                owner[keep],
+                obstacle_row[keep],
+                b_lo[keep],
+                b_hi[keep],
+            )
         # The protective field lies inside the warning field: test it only where that hit.
         u, w, half_w = shapes.u[owner], shapes.w[owner], shapes.half_w[owner]
-        b_lo, b_hi = box_lo[obstacle, :2], box_hi[obstacle, :2]
+        b_lo, b_hi = b_lo[:, :2], b_hi[:, :2]
         c_warn, h_warn = shapes.rect(table.warning_depth, owner)
         warn = rect_hits_box(c_warn, u, w, h_warn, half_w, b_lo, b_hi)
         owner, obstacle_row = owner[warn], obstacle_row[warn]
