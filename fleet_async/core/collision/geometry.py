@@ -307,4 +307,7 @@ class CollisionGeometry:
 
     def unpadded(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World AABBs of ``rows`` without the pad, as (min (N, 3), max (N, 3))."""
-        return self.aabb_min[rows] + self.pad, self.aabb_max[rows] - self.pad
+        # ``take`` along rows: several times faster than ``aabb_min[rows]`` on (N, 3) arrays.
+        return self.aabb_min.take(rows, axis=0) + self.pad, self.aabb_max.take(
+            rows, axis=0
+        ) - self.pad

@@ -34,7 +34,12 @@ import numpy as np
 
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.collision.safety_deadlock import DeadlockWatch, blocked_sets
-from fleet_async.core.collision.safety_geometry import FieldShapes, rect_hits_box
+from fleet_async.core.collision.safety_geometry import (
+    FieldShapes,
+    box_columns,
+    field_columns,
+    pair_hits,
+)
 from fleet_async.core.collision.safety_join import AHEAD, FieldPairs
 from fleet_async.core.collision.safety_params import SafetyFieldParams
 from fleet_async.core.collision.safety_reference import Hits, reference_hits
@@ -45,9 +50,6 @@ if TYPE_CHECKING:
     from fleet_async.core.world.world import World
 
 __all__ = ["FieldMotion", "SafetyFields"]
-
-
-_TOL = 1e-9  # m: the x / y cut before the exact test keeps boxes this far apart
 
 
 class FieldMotion(Protocol):
@@ -98,7 +100,9 @@ class SafetyFields:
         self._static_hi = np.zeros((0, 3))
         self._transparent: set[int] = set()  # object ids the fields ignore (map bodies)
         self._static_version = 0
-        self._opaque: tuple[np.ndarray, np.ndarray] | None = None  # (rows, not transparent)
+        self._static_cols: np.ndarray | None = None
+        self._own: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._opaque: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # rows, kept
         self._join = FieldPairs()
         self._layout = -1
         self.evaluator = "pairs"
@@ -191,6 +195,7 @@ class SafetyFields:
         self._static_hi = np.concatenate((self._static_hi, hi))
         self._transparent |= {obj.object_id for obj in replaces or ()}
         self._static_version += 1
+        self._static_cols = None
         self._opaque = None
 
     def field_corners(self, agent: Any, warning: bool = False) -> list[tuple[float, float]]:
@@ -208,6 +213,7 @@ class SafetyFields:
         self._static_hi = np.zeros((0, 3))
         self._transparent.clear()
         self._static_version += 1
+        self._static_cols = None
         self._opaque = None
         self._join.invalidate()
         self._motion.set_time_scale(None)
@@ -224,10 +230,7 @@ class SafetyFields:
         table.sync(self._collision)
         on_path = np.zeros(store.capacity, dtype=bool)
         on_path[self._motion.path_rows()] = True
-        seg_rows, seg_dirs = self._motion.segment_directions()
-        heading = np.zeros((store.capacity, 2))
-        heading[seg_rows] = seg_dirs
-        shapes, active = table.shapes(on_path, heading)
+        shapes, active = table.shapes(on_path, self._motion.segment_directions)
         hits = self._hits(shapes, active) if np.count_nonzero(active) else None
         scale = table.settle(
             active, hits, self._sim.step_count, self._emit, self._sim.params.timestep, self._objects
@@ -249,58 +252,59 @@ class SafetyFields:
         lo, hi = collision.geometry.unpadded(rows) if len(rows) else (np.zeros((0, 3)),) * 2
         if self._transparent:
             if self._opaque is None or self._opaque[0] is not rows:
-                ids = store.object_id[rows]
-                self._opaque = (rows, ~np.isin(ids, list(self._transparent)))
+                keep = ~np.isin(store.object_id[rows], list(self._transparent))
+                self._opaque = (rows, keep, rows[keep])
             keep = self._opaque[1]
-            rows, lo, hi = rows[keep], lo[keep], hi[keep]
+            rows, lo, hi = self._opaque[2], lo[keep], hi[keep]
         n_obj = len(rows)
-        f_lo, f_hi = shapes.bounds(table.warning_depth)
+        f_lo, f_hi = shapes.bounds(table.warning_depth)  # for the pair list only
         everyone = np.arange(len(table.rows))
         z_lo, z_hi = table.z_band(everyone)
-        at = np.minimum(np.searchsorted(rows, table.rows), max(n_obj - 1, 0))
-        own = np.where(rows[at] == table.rows, at, -1) if n_obj else np.full(len(at), -1)
+        own = self._own_index(rows, table.rows)
         ahead = AHEAD * self._sim.params.timestep
         self._join.update(
             (len(self._static_lo), self._static_version),
             table.rows,
             (np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))),
-            store.velocity[table.rows] * ahead,
+            store.velocity.take(table.rows, axis=0) * ahead,
             rows,
             (lo, hi),
-            store.velocity[rows] * ahead,
+            store.velocity.take(rows, axis=0) * ahead,
             (self._static_lo, self._static_hi),
             own,
         )
         owner, obstacle = self._join.field, self._join.obstacle
         sel = active[owner]
-        owner, obstacle = owner[sel], obstacle[sel]
-        box_lo = np.concatenate((lo, self._static_lo)) if len(self._static_lo) else lo
-        box_hi = np.concatenate((hi, self._static_hi)) if len(self._static_hi) else hi
-        # Boxes apart in x or y cannot touch the field (a cheap cut before the exact test;
-        # the tolerance keeps every pair that test could pass).
-        b_lo, b_hi = box_lo[obstacle], box_hi[obstacle]
-        keep = (f_lo[owner, 0] - _TOL <= b_hi[:, 0]) & (b_lo[:, 0] <= f_hi[owner, 0] + _TOL)
-        keep &= (f_lo[owner, 1] - _TOL <= b_hi[:, 1]) & (b_lo[:, 1] <= f_hi[owner, 1] + _TOL)
-        keep &= (b_hi[:, 2] >= z_lo[owner]) & (b_lo[:, 2] <= z_hi[owner])
-        owner, obstacle, b_lo, b_hi = owner[keep], obstacle[keep], b_lo[keep], b_hi[keep]
+        if np.count_nonzero(sel) < len(sel):
+            owner, obstacle = owner[sel], obstacle[sel]
+        boxes = box_columns(lo, hi)
+        if len(self._static_lo):
+            boxes = np.concatenate((boxes, self._static_columns()), axis=1)
+        fields = field_columns(shapes, table.warning_depth, table.protective_depth, z_lo, z_hi)
+        hit, prot = pair_hits(fields, boxes, owner, obstacle)
+        owner, obstacle = owner[hit], obstacle[hit]
         obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)
         keep = table.not_carried(owner, obstacle_row, world)
-        if not keep.all():
-            owner, obstacle_row, b_lo, b_hi = (
-                owner[keep],
-                obstacle_row[keep],
-                b_lo[keep],
-                b_hi[keep],
-            )
-        # The protective field lies inside the warning field: test it only where that hit.
-        u, w, half_w = shapes.u[owner], shapes.w[owner], shapes.half_w[owner]
-        b_lo, b_hi = b_lo[:, :2], b_hi[:, :2]
-        c_warn, h_warn = shapes.rect(table.warning_depth, owner)
-        warn = rect_hits_box(c_warn, u, w, h_warn, half_w, b_lo, b_hi)
-        owner, obstacle_row = owner[warn], obstacle_row[warn]
-        c_prot, h_prot = shapes.rect(table.protective_depth, owner)
-        prot = rect_hits_box(c_prot, u[warn], w[warn], h_prot, half_w[warn], b_lo[warn], b_hi[warn])
+        if np.count_nonzero(keep) < len(keep):
+            owner, obstacle_row, prot = owner[keep], obstacle_row[keep], prot[keep]
         return owner, obstacle_row, prot, np.ones(len(owner), dtype=bool)
+
+    def _own_index(self, rows: np.ndarray, owners: np.ndarray) -> np.ndarray:
+        """Each field owner's index among the obstacle ``rows``, -1 for none (cached while
+        both arrays stay the same objects: they are replaced, never changed in place)."""
+        cached = self._own
+        if cached is not None and cached[0] is rows and cached[1] is owners:
+            return cached[2]
+        n = len(rows)
+        at = np.minimum(np.searchsorted(rows, owners), max(n - 1, 0))
+        own = np.where(rows[at] == owners, at, -1) if n else np.full(len(at), -1)
+        self._own = (rows, owners, own)
+        return own
+
+    def _static_columns(self) -> np.ndarray:
+        if self._static_cols is None or self._static_cols.shape[1] != len(self._static_lo):
+            self._static_cols = box_columns(self._static_lo, self._static_hi)
+        return self._static_cols
 
     def _objects(self, rows: list[int]) -> list[Any]:
         world = self._sim.world

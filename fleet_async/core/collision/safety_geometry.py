@@ -12,26 +12,41 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FieldShapes", "heading_of", "rect_hits_box"]
+__all__ = [
+    "FieldShapes",
+    "box_columns",
+    "field_columns",
+    "heading_columns",
+    "heading_of",
+    "pair_hits",
+    "rect_hits_box",
+]
 
 
 def heading_of(quats: np.ndarray) -> np.ndarray:
     """(N, 2) unit x axes (in the ground plane) of (N, 4) quaternions (x, y, z, w)."""
-    x, y, z, w = quats[:, 0], quats[:, 1], quats[:, 2], quats[:, 3]
+    hx, hy = heading_columns((quats[:, 0], quats[:, 1], quats[:, 2], quats[:, 3]))
+    return np.stack((hx, hy), axis=1)
+
+
+def heading_columns(quat: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) columns of the unit x axes (in the ground plane) of quaternions given as
+    (x, y, z, w) columns."""
+    x, y, z, w = quat
     hx = 1.0 - 2.0 * (y * y + z * z)
     hy = 2.0 * (w * z + x * y)
     norm = np.hypot(hx, hy)
     norm[norm < 1e-12] = 1.0
-    return np.stack((hx / norm, hy / norm), axis=1)
+    return hx / norm, hy / norm
 
 
 class FieldShapes:
     """The fields of M robots in one step: travel frames, footprint extents, depths.
 
     Args:
-        centre: (M, 2) robot centres (m, world frame).
-        heading: (M, 2) unit headings.
-        travel: (M, 2) unit directions of travel.
+        centre: (x, y) columns (M,) of the robot centres (m, world frame).
+        heading: (x, y) columns of the unit headings.
+        travel: (x, y) columns of the unit directions of travel.
         half_length: (M,) footprint half lengths along the robot's x (m).
         half_width: (M,) footprint half widths (m).
         side: (M,) side margins (m).
@@ -39,20 +54,36 @@ class FieldShapes:
 
     def __init__(
         self,
-        centre: np.ndarray,
-        heading: np.ndarray,
-        travel: np.ndarray,
+        centre: tuple[np.ndarray, np.ndarray],
+        heading: tuple[np.ndarray, np.ndarray],
+        travel: tuple[np.ndarray, np.ndarray],
         half_length: np.ndarray,
         half_width: np.ndarray,
         side: np.ndarray,
     ) -> None:
-        self.centre = centre
-        self.u = travel
-        self.w = np.stack((-travel[:, 1], travel[:, 0]), axis=1)
-        cos = np.abs(np.einsum("ij,ij->i", travel, heading))
-        sin = np.abs(travel[:, 0] * heading[:, 1] - travel[:, 1] * heading[:, 0])
+        self.cx, self.cy = centre
+        self.ux, self.uy = travel
+        self.wx, self.wy = -travel[1], travel[0]
+        hx, hy = heading
+        cos = np.abs(self.ux * hx + self.uy * hy)
+        sin = np.abs(self.ux * hy - self.uy * hx)
         self.ext_u = half_length * cos + half_width * sin
         self.half_w = half_length * sin + half_width * cos + side
+
+    @property
+    def centre(self) -> np.ndarray:
+        """(M, 2) robot centres."""
+        return np.column_stack((self.cx, self.cy))
+
+    @property
+    def u(self) -> np.ndarray:
+        """(M, 2) unit directions of travel."""
+        return np.column_stack((self.ux, self.uy))
+
+    @property
+    def w(self) -> np.ndarray:
+        """(M, 2) unit directions to the left of travel."""
+        return np.column_stack((self.wx, self.wy))
 
     def rect(
         self, depth: np.ndarray, which: np.ndarray | None = None
@@ -67,16 +98,20 @@ class FieldShapes:
 
     def bounds(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(min (M, 2), max (M, 2)) world-frame bounds of the fields of ``depth`` metres."""
-        centre, half = self.rect(depth)
-        au, aw = np.abs(self.u), np.abs(self.w)
-        reach = au * half[:, None] + aw * self.half_w[:, None]
-        return centre - reach, centre + reach
+        half = 0.5 * depth
+        reach = self.ext_u + half
+        x = self.cx + self.ux * reach
+        y = self.cy + self.uy * reach
+        rx = np.abs(self.ux) * half + np.abs(self.wx) * self.half_w
+        ry = np.abs(self.uy) * half + np.abs(self.wy) * self.half_w
+        return np.column_stack((x - rx, y - ry)), np.column_stack((x + rx, y + ry))
 
     def corners(self, index: int, depth: float) -> list[tuple[float, float]]:
         """The four world-frame corners (m) of robot ``index``'s field of ``depth`` metres,
         counter-clockwise from the footprint's front right."""
-        u, w = self.u[index], self.w[index]
-        base = self.centre[index] + u * self.ext_u[index]
+        u = np.array([self.ux[index], self.uy[index]])
+        w = np.array([self.wx[index], self.wy[index]])
+        base = np.array([self.cx[index], self.cy[index]]) + u * self.ext_u[index]
         hw = self.half_w[index]
         pts = (base - w * hw, base + u * depth - w * hw, base + u * depth + w * hw, base + w * hw)
         return [(float(p[0]), float(p[1])) for p in pts]
@@ -109,3 +144,97 @@ def rect_hits_box(
     ok &= np.abs(dx * ux + dy * uy) <= half_u + hx * aux + hy * auy
     ok &= np.abs(dx * wx + dy * wy) <= half_w + hx * awx + hy * awy
     return ok
+
+
+# Rows of ``field_columns`` and ``box_columns`` (column-major: one contiguous row per term).
+_CW, _CP = 0, 5  # warning / protective field: centre x, centre y, half depth, reach x, reach y
+_UX, _UY, _WX, _WY, _HW, _AUX, _AUY, _AWX, _AWY, _ZLO, _ZHI = range(10, 21)
+_MX, _MY, _HX, _HY, _BZLO, _BZHI = range(6)
+
+
+def field_columns(
+    shapes: FieldShapes, warn: np.ndarray, prot: np.ndarray, z_lo: np.ndarray, z_hi: np.ndarray
+) -> np.ndarray:
+    """(21, M) per-field terms of :func:`rect_hits_box` for the warning (``warn`` m deep) and
+    protective fields, computed once per field with the same operations, so that
+    :func:`pair_hits` gives bit for bit what ``rect_hits_box`` gives per pair."""
+    out = np.empty((21, len(warn)))
+    ux, uy, wx, wy = shapes.ux, shapes.uy, shapes.wx, shapes.wy
+    aux, auy, awx, awy = np.abs(ux), np.abs(uy), np.abs(wx), np.abs(wy)
+    half_w = shapes.half_w
+    for at, depth in ((_CW, warn), (_CP, prot)):
+        half = np.multiply(0.5, depth, out=out[at + 2])
+        reach = shapes.ext_u + half
+        np.add(shapes.cx, ux * reach, out=out[at])
+        np.add(shapes.cy, uy * reach, out=out[at + 1])
+        np.add(aux * half, awx * half_w, out=out[at + 3])
+        np.add(auy * half, awy * half_w, out=out[at + 4])
+    out[_UX:] = (ux, uy, wx, wy, half_w, aux, auy, awx, awy, z_lo, z_hi)
+    return out
+
+
+def box_columns(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(6, K) per-box terms of :func:`rect_hits_box` (centre, half extents) and the z range."""
+    out = np.empty((6, len(lo)))
+    lo_t, hi_t = lo.T, hi.T
+    np.multiply(0.5, hi_t[0] + lo_t[0], out=out[_MX])
+    np.multiply(0.5, hi_t[1] + lo_t[1], out=out[_MY])
+    np.multiply(0.5, hi_t[0] - lo_t[0], out=out[_HX])
+    np.multiply(0.5, hi_t[1] - lo_t[1], out=out[_HY])
+    out[_BZLO] = lo_t[2]
+    out[_BZHI] = hi_t[2]
+    return out
+
+
+def _sat(f: np.ndarray, b: list[np.ndarray], at: int, which: np.ndarray) -> np.ndarray:
+    """``rect_hits_box`` on the pairs' gathered terms (``at``: which field; ``which``: the
+    pairs' field indices into ``f``): the two world axes first, the field's own axes only
+    for the pairs that pass them when those are few."""
+    hx, hy = b[_HX], b[_HY]
+    dx = f[at][which] - b[_MX]
+    dy = f[at + 1][which] - b[_MY]
+    ok = np.abs(dx) <= f[at + 3][which] + hx
+    ok &= np.abs(dy) <= f[at + 4][which] + hy
+    n = int(np.count_nonzero(ok))
+    if not n:
+        return ok
+    if 2 * n < len(ok):
+        sub = ok.nonzero()[0]
+        ok[sub] = _sat_own_axes(f, hx[sub], hy[sub], dx[sub], dy[sub], at, which[sub])
+    else:
+        ok &= _sat_own_axes(f, hx, hy, dx, dy, at, which)
+    return ok
+
+
+def _sat_own_axes(
+    f: np.ndarray,
+    hx: np.ndarray,
+    hy: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    at: int,
+    which: np.ndarray,
+) -> np.ndarray:
+    along = dx * f[_UX][which] + dy * f[_UY][which]
+    reach = f[at + 2][which] + hx * f[_AUX][which] + hy * f[_AUY][which]
+    ok = np.abs(along) <= reach
+    across = dx * f[_WX][which] + dy * f[_WY][which]
+    reach = f[_HW][which] + hx * f[_AWX][which] + hy * f[_AWY][which]
+    ok &= np.abs(across) <= reach
+    return ok
+
+
+def pair_hits(
+    fields: np.ndarray, boxes: np.ndarray, field: np.ndarray, box: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(indices into the pairs whose box is in the warning field and the field's z band,
+    whether it is in the protective field too) for the pairs ``(field[k], box[k])`` of
+    :func:`field_columns` and :func:`box_columns` columns."""
+    # 1-D fancy indexing: measured twice as fast as ``take`` on these sizes.
+    b = [row[box] for row in boxes]
+    ok = (b[_BZHI] >= fields[_ZLO][field]) & (b[_BZLO] <= fields[_ZHI][field])
+    ok &= _sat(fields, b, _CW, field)
+    hit = ok.nonzero()[0]
+    if len(hit) < len(ok):
+        b, field = [row[hit] for row in b], field[hit]
+    return hit, _sat(fields, b, _CP, field)

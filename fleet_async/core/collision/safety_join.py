@@ -194,12 +194,19 @@ class FieldPairs:
             return
         gf_lo, gf_hi = self._gf
         go_lo, go_hi = self._go
-        f_out = np.any((f_box[0] < gf_lo) | (f_box[1] > gf_hi), axis=1)
         n = len(obstacle_rows)
+        # The usual step: everything inside its grown box (whole-array tests, no per-row
+        # reduction).
+        if (
+            np.all(f_box[0] >= gf_lo)
+            and np.all(f_box[1] <= gf_hi)
+            and np.all(o_box[0] >= go_lo[:n])
+            and np.all(o_box[1] <= go_hi[:n])
+        ):
+            return
+        f_out = np.any((f_box[0] < gf_lo) | (f_box[1] > gf_hi), axis=1)
         o_out = np.any((o_box[0] < go_lo[:n]) | (o_box[1] > go_hi[:n]), axis=1)
         nf, no = int(np.count_nonzero(f_out)), int(np.count_nonzero(o_out))
-        if not nf and not no:
-            return
         if _REBUILD_SHARE * (nf + no) > len(field_rows) + n:
             self._build(key, field_rows, f_box, f_shift, obstacle_rows, o_box, o_shift, static, own)
             return

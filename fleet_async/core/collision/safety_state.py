@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fleet_async.core.base.events import SimEvents
-from fleet_async.core.collision.safety_geometry import FieldShapes, heading_of
+from fleet_async.core.collision.safety_geometry import FieldShapes, heading_columns
 from fleet_async.core.collision.safety_params import SafetyFieldParams
 
 if TYPE_CHECKING:
@@ -170,6 +170,7 @@ class FieldTable:
         self._active = np.zeros(len(prm), dtype=bool)
         self.speed = np.zeros(len(prm))
         self._z_known = np.zeros(len(prm), dtype=bool)
+        self._memo: dict[str, tuple[tuple[np.ndarray, ...], Any]] = {}
 
     def sync(self, collision: CollisionSystem) -> None:
         """Rebuild after membership changes; take footprints and heights from collision boxes."""
@@ -197,30 +198,42 @@ class FieldTable:
 
     def z_band(self, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(bottom, top) (m) of the fields of entries ``owners``."""
-        z = self._store.position[self.rows[owners], 2]
+        z = self._store.position[:, 2][self.rows[owners]]
         return z + self.z_off[owners, 0] + _CLEARANCE, z + self.z_off[owners, 1]
 
-    def shapes(self, on_path: np.ndarray, segment: np.ndarray) -> tuple[FieldShapes, np.ndarray]:
+    def shapes(
+        self, on_path: np.ndarray, segments: Callable[[], tuple[np.ndarray, np.ndarray]]
+    ) -> tuple[FieldShapes, np.ndarray]:
         """This step's field shapes and which entries have a field in force.
 
         Args:
             on_path: (capacity,) whether each store row follows a path.
-            segment: (capacity, 2) unit direction of each row's current path segment, zero
-                where it has none (standing, turning in place).
+            segments: Returns (store rows, (K, 2) unit directions) of the rows whose current
+                path segment moves them (others stand or turn in place); asked only when
+                some robot with fields stands.
         """
         store, rows, held = self._store, self.rows, self.held
-        vel = store.velocity[rows, :2]
-        speed = np.hypot(vel[:, 0], vel[:, 1])
+        vx, vy = store.velocity[:, 0][rows], store.velocity[:, 1][rows]
+        speed = self._cache("speed", (vx, vy), lambda c: np.hypot(c[0], c[1]))
         moving = speed > _MOVING
         # Where a robot drives: along its velocity; standing (stopped, or about to start a
         # segment), along the segment it is to drive (a new path turns a stopped robot's
         # fields with it); else the way it was going when it stopped.
-        seg = segment[rows]
-        has_seg = np.any(seg != 0.0, axis=1)
+        if np.count_nonzero(moving) < len(moving):
+            seg_rows, seg_dirs = segments()
+            seg = np.zeros((store.capacity, 2))
+            seg[seg_rows] = seg_dirs
+            sx, sy = seg[:, 0][rows], seg[:, 1][rows]
+            has_seg = (sx != 0.0) | (sy != 0.0)
+        else:  # everyone drives: the segments decide nothing
+            sx = sy = np.zeros(len(rows))
+            has_seg = np.zeros(len(rows), dtype=bool)
         active = on_path[rows] & (moving | held | has_seg)
-        standing = np.where(has_seg[:, None], seg, self.held_dir)
-        travel = np.where(moving[:, None], vel / np.where(moving, speed, 1.0)[:, None], standing)
-        travel[~(moving | held | has_seg)] = (1.0, 0.0)
+        divisor = np.where(moving, speed, 1.0)
+        tx = np.where(moving, vx / divisor, np.where(has_seg, sx, self.held_dir[:, 0]))
+        ty = np.where(moving, vy / divisor, np.where(has_seg, sy, self.held_dir[:, 1]))
+        idle = ~(moving | held | has_seg)
+        tx[idle], ty[idle] = 1.0, 0.0
         # The speed the robot's path is planned at (its actual speed undoes last step's scale;
         # a stopped robot resumes at the speed it stopped at), and the speed it drives at now,
         # which sizes the fields: a stopped robot's fields are their standstill depth.
@@ -228,12 +241,44 @@ class FieldTable:
         self.speed = np.where(held, self.held_speed, speed / np.where(last > 0, last, 1.0))
         self.protective_depth = speed * speed / (2.0 * self.decel) + self.margin_p
         self.warning_depth = self.protective_depth + self.margin_w
-        heading = heading_of(store.orientation[rows])
+        quat = tuple(store.orientation[:, k][rows] for k in range(4))
+        hx, hy = self._cache("heading", quat, heading_columns)
+        pos = store.position
         shapes = FieldShapes(
-            store.position[rows, :2], heading, travel, self.half[:, 0], self.half[:, 1], self.side
+            (pos[:, 0][rows], pos[:, 1][rows]),
+            (hx, hy),
+            (tx, ty),
+            self.half[:, 0],
+            self.half[:, 1],
+            self.side,
         )
         self._shapes, self._active = shapes, active
         return shapes, active
+
+    def _cache(self, name: str, inputs: tuple[np.ndarray, ...], fn: Callable[[Any], Any]) -> Any:
+        """``fn(inputs)`` (arrays of one value per entry), recomputed only for the entries whose
+        inputs changed since the last step (the same values: ``fn`` works entry by entry)."""
+        old = self._memo.get(name)
+        if old is not None and len(old[0][0]) == len(inputs[0]):
+            changed = np.zeros(len(inputs[0]), dtype=bool)
+            for a, b in zip(inputs, old[0], strict=True):
+                changed |= a != b
+            if not np.count_nonzero(changed):
+                return old[1]
+            idx = changed.nonzero()[0]
+            fresh = fn(tuple(a[idx] for a in inputs))
+            out = old[1]
+            if isinstance(out, tuple):
+                out = tuple(o.copy() for o in out)
+                for o, f in zip(out, fresh, strict=True):
+                    o[idx] = f
+            else:
+                out = out.copy()
+                out[idx] = fresh
+        else:
+            out = fn(inputs)
+        self._memo[name] = (inputs, out)
+        return out
 
     def not_carried(self, owner: np.ndarray, obstacle_row: np.ndarray, world: World) -> np.ndarray:
         """Mask of pairs whose obstacle is not carried by (attached below) the field's owner."""
