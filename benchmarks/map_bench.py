@@ -1,23 +1,28 @@
-"""Grid map benchmark: load a 161 x 63 warehouse-like MovingAI map with 1,000 robots, then step
-them with safety fields on.
+"""Grid map benchmark: the MovingAI warehouse map warehouse-10-20-10-2-1 (161 x 63 cells of 1 m)
+with 1,000 robots with safety fields driving along its aisles.
 
-The map is generated here in MovingAI's format (not the benchmark set's
-warehouse-10-20-10-2-1, whose licence we have not checked): a 161 x 63 grid with a free border
-of 2 cells, shelf blocks 10 cells long and 1 deep in rows 2 cells apart, 2-cell cross aisles
-every 12 cells (the same dimensions as the warehouse maps of the MovingAI set). Robots (0.6 x
-0.4 m, cells of 1 m) start on free cells and each drives to another free cell in its aisle.
+The map is the benchmark set's own (``tests/data/traffic/warehouse-10-20-10-2-1.map``, see the
+README there): shelf blocks 10 cells long and 2 deep, one-cell aisles between the shelf rows,
+one-cell gaps between the blocks, an open area on each side. The robots (0.6 x 0.4 m boxes,
+omnidirectional, fields on: 1 m/s, so the warning field reaches 1.1 m ahead) start on random
+cells of the long east-west aisles and drive one way per aisle (alternate aisles east and west,
+as one-way aisles are run), each to a cell 20-60 m further along its aisle: robots catch up
+with slower ones ahead, slow in their warning fields and stop behind each other, and the map's
+shelves stand beside every field. ``--flow head-on`` instead sends half the robots of each
+aisle the other way (a stress test: they block each other for good).
 
-Reports the wall time to load the map and spawn the robots, and the median step time (with the
-``safety_fields`` and ``collision_check`` phases' shares) over ``--steps`` steps.
+Reports the time to load the map, and with the robots spawned, and the median step (with the
+``safety_fields`` and ``collision_check`` phases, collisions checked every step) over
+``--steps`` steps, as wall times of the step profile and as the process's CPU time per step
+(``time.process_time``: what the run costs on a loaded machine).
 
-Run:  python benchmarks/map_bench.py [--robots 1000] [--steps 50]
+Run:  python benchmarks/map_bench.py [--robots 1000] [--steps 50] [--flow one-way|head-on]
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
-import tempfile
 import time
 from pathlib import Path
 
@@ -32,75 +37,94 @@ from fleet_async import (
     SimulationParams,
 )
 
-WIDTH, HEIGHT = 161, 63
+MAP = Path(__file__).resolve().parents[1] / "tests/data/traffic/warehouse-10-20-10-2-1.map"
 BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])
+WARMUP = 5
 
 
-def warehouse_text() -> str:
-    """The generated map, in MovingAI's .map format."""
-    rows = []
-    for y in range(HEIGHT):
-        row = []
-        for x in range(WIDTH):
-            inner = 2 <= x < WIDTH - 2 and 2 <= y < HEIGHT - 2
-            shelf = inner and y % 2 == 0 and (x - 2) % 12 < 10
-            row.append("@" if shelf else ".")
-        rows.append("".join(row))
-    return f"type octile\nheight {HEIGHT}\nwidth {WIDTH}\nmap\n" + "\n".join(rows) + "\n"
+def aisle_cells(free: np.ndarray, width: int) -> np.ndarray:
+    """(K, 2) (row, col) free cells of the rows that are free from one side to the other
+    (the long aisles), without the map's border columns."""
+    rows, counts = np.unique(free[:, 0], return_counts=True)
+    long_rows = rows[counts >= width - 2]
+    cells = free[np.isin(free[:, 0], long_rows)]
+    return cells[(cells[:, 1] >= 1) & (cells[:, 1] <= width - 2)]
+
+
+def build(robots: int, flow: str, seed: int = 0) -> tuple[MultiRobotSimulationCore, float, float]:
+    """The simulation with map and robots on their way; (sim, map load s, load + spawn s)."""
+    t0 = time.perf_counter()
+    sim = MultiRobotSimulationCore(
+        SimulationParams(
+            gui=False,
+            monitor=False,
+            target_rtf=0.0,
+            timestep=0.1,
+            enable_floor=False,
+            collision_check_frequency=None,
+        )
+    )
+    loaded = sim.load_map(MAP, resolution=1.0)
+    t_map = time.perf_counter() - t0
+    width = loaded.grid.occupied.shape[1]
+    cells = aisle_cells(loaded.free_cells(), width)
+    rng = np.random.default_rng(seed)
+    starts = cells[rng.choice(len(cells), size=robots, replace=False)]
+    params = [
+        AgentSpawnParams(
+            visual_shape=None,
+            collision_shape=BOX,
+            initial_pose=Pose.from_xyz(*loaded.cell_position(int(r), int(c), 0.2)),
+            motion_mode="omnidirectional",
+            safety_field=True,
+        )
+        for r, c in starts.tolist()
+    ]
+    agents = Agent.spawn_batch(params, sim)
+    t_load = time.perf_counter() - t0
+    aisles = np.unique(cells[:, 0])
+    for k, (agent, (r, c)) in enumerate(zip(agents, starts.tolist(), strict=True)):
+        east = int(np.searchsorted(aisles, r)) % 2 == 0
+        if flow == "head-on" and k % 2:
+            east = not east
+        step = int(rng.integers(20, 61))
+        goal = min(c + step, width - 2) if east else max(c - step, 1)
+        if goal == c:
+            goal = c - 1 if east else c + 1
+        agent.set_path([Pose.from_xyz(*loaded.cell_position(int(r), int(goal), 0.2))])
+    return sim, t_map, t_load
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robots", type=int, default=1000)
     parser.add_argument("--steps", type=int, default=50)
+    parser.add_argument("--flow", choices=("one-way", "head-on"), default="one-way")
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "warehouse-161x63.map"
-        path.write_text(warehouse_text())
-        t0 = time.perf_counter()
-        sim = MultiRobotSimulationCore(
-            SimulationParams(gui=False, monitor=False, target_rtf=0.0, enable_floor=False)
-        )
-        loaded = sim.load_map(path, resolution=1.0)
-        t_map = time.perf_counter() - t0
-        free = loaded.free_cells()
-        aisle = free[(free[:, 0] % 2 == 1) & (free[:, 0] >= 3) & (free[:, 0] < HEIGHT - 3)]
-        rng = np.random.default_rng(0)
-        starts = aisle[rng.choice(len(aisle), size=args.robots, replace=False)]
-        params = [
-            AgentSpawnParams(
-                visual_shape=None,
-                collision_shape=BOX,
-                initial_pose=Pose.from_xyz(*loaded.cell_position(int(r), int(c), 0.2)),
-                motion_mode="omnidirectional",
-                safety_field=True,
-            )
-            for r, c in starts.tolist()
-        ]
-        agents = Agent.spawn_batch(params, sim)
-        t_load = time.perf_counter() - t0
-        for agent, (r, c) in zip(agents, starts.tolist(), strict=True):
-            goal_col = int(rng.integers(2, WIDTH - 2))
-            agent.set_path([Pose.from_xyz(*loaded.cell_position(int(r), goal_col, 0.2))])
-        with sim:
-            for _ in range(5):
-                sim.step_once()
-            steps, phase, check = [], [], []
-            for _ in range(args.steps):
-                timings = sim.step_once(return_profiling=True)
-                assert timings is not None
-                steps.append(timings["total"])
-                phase.append(timings["safety_fields"])
-                check.append(timings["collision_check"])
-            stopped = len(sim.safety.stopped_agents())
+    sim, t_map, t_load = build(args.robots, args.flow)
+    loaded = sim.maps[0]
+    with sim:
+        for _ in range(WARMUP):
+            sim.step_once()
+        steps, phase, check, cpu = [], [], [], []
+        for _ in range(args.steps):
+            c0 = time.process_time()
+            timings = sim.step_once(return_profiling=True)
+            cpu.append((time.process_time() - c0) * 1e3)
+            assert timings is not None
+            steps.append(timings["total"])
+            phase.append(timings["safety_fields"])
+            check.append(timings["collision_check"])
+        stopped = len(sim.safety.stopped_agents())
     print(
-        f"{WIDTH} x {HEIGHT} map: {len(loaded.lo)} obstacle boxes in {len(loaded.bodies)} bodies, "
-        f"loaded in {t_map:.2f} s; with {args.robots} robots spawned: {t_load:.2f} s"
+        f"{MAP.name}: {len(loaded.lo)} obstacle boxes in {len(loaded.bodies)} bodies, loaded "
+        f"in {t_map:.2f} s; with {args.robots} robots spawned: {t_load:.2f} s"
     )
     print(
-        f"step (median of {args.steps}): {statistics.median(steps):.2f} ms, of which "
-        f"safety_fields {statistics.median(phase):.2f} ms, collision_check "
-        f"{statistics.median(check):.2f} ms; {stopped} robots stopped at the end"
+        f"step (median of {args.steps}, flow {args.flow}): {statistics.median(steps):.2f} ms "
+        f"(CPU {statistics.median(cpu):.2f} ms), of which safety_fields "
+        f"{statistics.median(phase):.2f} ms, collision_check {statistics.median(check):.2f} ms; "
+        f"{stopped} robots stopped at the end"
     )
 
 

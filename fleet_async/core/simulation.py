@@ -54,6 +54,7 @@ class MultiRobotSimulationCore(
     ) -> None:
         super().__init__(params, collision_color)
         self.safety.recorder = self.trace_event  # safety stops and deadlocks in the trace
+        self.safety.recording = lambda: self.tracer is not None
         self._start_gui_camera()
 
     def run_simulation(self, duration: float | None = None) -> None:

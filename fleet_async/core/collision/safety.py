@@ -112,6 +112,9 @@ class SafetyFields:
         self.recorder: Callable[..., None] | None = None
         """Called ``recorder(kind, object_id, **data)`` for each stop, end and deadlock (the
         simulation points it at ``sim.trace_event``, so a running trace logs them)."""
+        self.recording: Callable[[], bool] = _always
+        """Whether the recorder wants events now (the simulation's: whether a trace runs); the
+        fields drawn with each stop are only worked out then."""
 
     # ----- agents -------------------------------------------------------------------------
 
@@ -315,7 +318,7 @@ class SafetyFields:
         sim = self._sim
         if sim.events.has_handlers(kind):
             sim.events.emit(kind, sim=sim, agent=agent, **data)
-        if self.recorder is not None:
+        if self.recorder is not None and self.recording():
             extra: dict[str, Any] = {}
             if kind == SimEvents.SAFETY_STOP_STARTED:  # the fields that stopped it, to draw
                 extra["protective"] = _rounded(self.field_corners(agent))
@@ -333,9 +336,13 @@ class SafetyFields:
                 sim.events.emit(
                     SimEvents.DEADLOCK_SUSPECTED, sim=sim, agents=robots, sim_time=sim.sim_time
                 )
-            if self.recorder is not None:
+            if self.recorder is not None and self.recording():
                 ids = [a.object_id for a in robots]
                 self.recorder(SimEvents.DEADLOCK_SUSPECTED, None, robots=ids, names=names)
+
+
+def _always() -> bool:
+    return True
 
 
 def _plain(data: dict[str, Any]) -> dict[str, Any]:

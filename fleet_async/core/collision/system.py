@@ -88,6 +88,7 @@ class CollisionSystem:
         self._all_rows = False  # rows == arange(high): views instead of gathers
         self._flat: np.ndarray | None = None  # NORMAL_2D mask over rows, None if none
         self._static: np.ndarray | None = None  # STATIC mask over rows, None if none
+        self._unstatic: tuple[np.ndarray, np.ndarray | None] | None = None
         self._plain = False  # no STATIC, no articulated rows: whole-array AABB refresh allowed
         self._start = np.zeros((0, 3))  # row positions at the previous check (sweep)
         # Rows were added, removed or changed mode since the last check. Kept until a check
@@ -224,6 +225,11 @@ class CollisionSystem:
         flat, static = modes == _FLAT, modes == _STATIC
         self._flat = flat if np.count_nonzero(flat) else None
         self._static = static if np.count_nonzero(static) else None
+        self._unstatic = None  # (rows that are not static, their NORMAL_2D mask or None)
+        if self._static is not None:
+            moving = ~static
+            mflat = flat[moving]
+            self._unstatic = (self._rows[moving], mflat if np.count_nonzero(mflat) else None)
         self._plain = self._static is None and not np.count_nonzero(geo.articulated[self._rows])
         self._layout = store.layout_version
 
@@ -288,11 +294,19 @@ class CollisionSystem:
         """Candidate row pairs (sharing a hash cell, one side moved, static rules applied);
         ``moved`` None: the store's flags. Their AABBs may not overlap."""
         store, geo = self._sim.state, self.geometry
-        rows = self._rows
+        rows, flat, all_rows = self._rows, self._flat, self._all_rows
+        skip_static = self.ignore_static if ignore_static is None else ignore_static
+        if skip_static and self._unstatic is not None and self._static is not None:
+            # Every pair with a static row is left out, so static rows (a map's tile bodies,
+            # big enough to be paired with every object) are not hashed at all.
+            rows, flat = self._unstatic
+            all_rows = False
+            if moved is not None:
+                moved = moved[~self._static]
         high = store.high_water
-        boxes = geo.aabb[:, :high] if self._all_rows else geo.aabb.take(rows, axis=1)
+        boxes = geo.aabb[:, :high] if all_rows else geo.aabb.take(rows, axis=1)
         if moved is None:
-            moved = store.moved[:high] if self._all_rows else store.moved[rows]
+            moved = store.moved[:high] if all_rows else store.moved[rows]
         amin, amax = boxes[0], boxes[1]
         side_by_side: np.ndarray | None = boxes
         threshold = self.multi_cell_threshold
@@ -306,14 +320,11 @@ class CollisionSystem:
             # tested that way.
             threshold = max(threshold, _SWEPT_CELLS)
         cell = self.resolve_cell_size(rows)
-        idx = candidate_pairs(amin, amax, self._flat, moved, cell, threshold, side_by_side)
-        if len(idx) and self._static is not None:
-            skip_static = self.ignore_static if ignore_static is None else ignore_static
-            if skip_static:  # else static-static pairs are checked too, once (they never move)
-                idx = idx[~(self._static[idx[:, 0]] | self._static[idx[:, 1]])]
+        idx = candidate_pairs(amin, amax, flat, moved, cell, threshold, side_by_side)
+        # (Not skipping static rows, static-static pairs are checked too, once: they never move.)
         if not len(idx):
             return _NO_PAIRS
-        return idx if self._all_rows else rows[idx]
+        return idx if all_rows else rows[idx]
 
     # ----- checks -------------------------------------------------------------------------
 
