@@ -116,6 +116,7 @@ def main() -> None:
             phase.append(timings["safety_fields"])
             check.append(timings["collision_check"])
         stopped = len(sim.safety.stopped_agents())
+        lists = sim.safety.pair_list_stats()
     print(
         f"{MAP.name}: {len(loaded.lo)} obstacle boxes in {len(loaded.bodies)} bodies, loaded "
         f"in {t_map:.2f} s; with {args.robots} robots spawned: {t_load:.2f} s"
@@ -124,7 +125,7 @@ def main() -> None:
         f"step (median of {args.steps}, flow {args.flow}): {statistics.median(steps):.2f} ms "
         f"(CPU {statistics.median(cpu):.2f} ms), of which safety_fields "
         f"{statistics.median(phase):.2f} ms, collision_check {statistics.median(check):.2f} ms; "
-        f"{stopped} robots stopped at the end"
+        f"{stopped} robots stopped at the end; pair list {lists}"
     )
 
 

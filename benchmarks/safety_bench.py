@@ -9,8 +9,9 @@ narrow phase on the same fleet, every step: a yardstick measured in the same run
 holds on a loaded machine), and of the whole step. ``--only on`` / ``--only off`` runs one
 configuration, for ``farm-bench`` to time whole processes side by side.
 
-Times are CPU-bound single-thread wall times of this process; the machine may be loaded, so
-quote the median of several runs (``farm-bench``) rather than one.
+Phase times are wall times of the step profile; "step CPU" is the process's CPU time per
+step (``time.process_time``), which a loaded machine inflates less. Quote the median of
+several runs (``farm-bench``) rather than one.
 
 Run:  python benchmarks/safety_bench.py [--robots 10000] [--steps 50]
 """
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import time
 
 from fleet_async import (
     Agent,
@@ -62,22 +64,32 @@ def build(robots: int, fields: bool) -> tuple[MultiRobotSimulationCore, list[Age
     return sim, agents
 
 
-def measure(robots: int, steps: int, fields: bool) -> tuple[float, float, float]:
-    """Median (safety_fields ms, collision_check ms, step ms) per step."""
+def measure(robots: int, steps: int, fields: bool) -> dict[str, float]:
+    """Per-step medians (ms): the ``safety_fields`` phase, ``collision_check``, the step, the
+    step's CPU time; and the phase's mean (the pair list's rebuilds are spikes)."""
     sim, _ = build(robots, fields)
     with sim:
         for _ in range(WARMUP):
             sim.step_once()
-        phase, check, total = [], [], []
+        phase, check, total, cpu = [], [], [], []
         for _ in range(steps):
+            c0 = time.process_time()
             timings = sim.step_once(return_profiling=True)
+            cpu.append((time.process_time() - c0) * 1e3)
             assert timings is not None
             phase.append(timings["safety_fields"])
             check.append(timings["collision_check"])
             total.append(timings["total"])
         stopped = len(sim.safety.stopped_agents())
-        print(f"  fields={fields}: {stopped} robots stopped at the end")
-    return statistics.median(phase), statistics.median(check), statistics.median(total)
+        lists = sim.safety.pair_list_stats()
+        print(f"  fields={fields}: {stopped} robots stopped at the end; pair list {lists}")
+    return {
+        "phase": statistics.median(phase),
+        "phase_mean": statistics.fmean(phase),
+        "check": statistics.median(check),
+        "step": statistics.median(total),
+        "cpu": statistics.median(cpu),
+    }
 
 
 def main() -> None:
@@ -90,10 +102,11 @@ def main() -> None:
     for fields in (True, False):
         if args.only is not None and fields != (args.only == "on"):
             continue
-        phase, check, total = measure(args.robots, args.steps, fields)
+        m = measure(args.robots, args.steps, fields)
         print(
-            f"  fields {'on ' if fields else 'off'}: safety_fields {phase:.3f}, "
-            f"collision_check {check:.3f}, step {total:.3f}"
+            f"  fields {'on ' if fields else 'off'}: safety_fields {m['phase']:.3f} "
+            f"(mean {m['phase_mean']:.3f}), collision_check {m['check']:.3f}, "
+            f"step {m['step']:.3f}, step CPU {m['cpu']:.3f}"
         )
 
 

@@ -173,6 +173,12 @@ class SafetyFields:
         """``deadlock_suspected`` events so far."""
         return self._watch.count
 
+    def pair_list_stats(self) -> dict[str, int]:
+        """The fields' pair list (``safety_join.py``), for benchmarks: ``builds`` (times built
+        anew), ``patches`` (steps that joined escaped boxes again), ``pairs`` (listed now)."""
+        join = self._join
+        return {"builds": join.builds, "patches": join.patches, "pairs": len(join.field)}
+
     def stats(self) -> dict[int, tuple[int, float]]:
         """``{object_id: (stops, time stopped in s)}`` of every agent that had fields."""
         dt = self._sim.params.timestep

@@ -25,10 +25,9 @@ import numpy as np
 __all__ = ["AHEAD", "SKIN", "FieldPairs", "box_pairs"]
 
 SKIN = 0.2  # m every box is grown by on each side when the list is built
-AHEAD = 4  # steps of its velocity a grown box also covers
+AHEAD = 8  # steps of its velocity a grown box also covers
 _Z_SKIN = 0.01  # m in z (robots rarely change height)
-_KEY = np.int64(1 << 32)  # cell key = x * 2**32 + y
-_MAX_SPAN = 256  # cells a target may cover per axis and be hashed (else tested against all)
+_MAX_SPAN = 64  # cells a target may span per axis and be hashed (else tested against all)
 _REBUILD_SHARE = 4  # escaped boxes beyond 1 / this share of all: build the list anew
 _EMPTY = np.zeros(0, dtype=np.int64)
 
@@ -53,13 +52,18 @@ def _overlap(
     t_hi: np.ndarray,
     qi: np.ndarray,
     ti: np.ndarray,
-) -> np.ndarray:
-    """Whether boxes ``q[qi]`` and ``t[ti]`` overlap on every axis (touching counts)."""
-    ok = np.ones(len(qi), dtype=bool)
+) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(qi[k], ti[k])`` whose boxes overlap on every axis (touching counts),
+    axis by axis, each axis testing only the pairs the previous ones kept."""
     for axis in range(q_lo.shape[1]):
-        ok &= q_lo[qi, axis] <= t_hi[ti, axis]
-        ok &= t_lo[ti, axis] <= q_hi[qi, axis]
-    return ok
+        if not len(qi):
+            break
+        ql, qh = q_lo[:, axis], q_hi[:, axis]
+        tl, th = t_lo[:, axis], t_hi[:, axis]
+        ok = (ql[qi] <= th[ti]) & (tl[ti] <= qh[qi])
+        if np.count_nonzero(ok) < len(ok):
+            qi, ti = qi[ok], ti[ok]
+    return qi, ti
 
 
 def box_pairs(
@@ -67,64 +71,86 @@ def box_pairs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(query index, target index) of every pair of overlapping boxes, each pair once.
 
+    Each target is entered in the grid cell of its centre (a counting sort over a dense grid
+    of cells spanning the targets); each query visits the cells whose targets could reach it
+    (its box grown by the largest target half extent) and tests those exactly.
+
     Args:
         q_lo, q_hi: (Q, D) query boxes (D >= 2; the grid uses x and y, the test every axis).
         t_lo, t_hi: (T, D) target boxes.
-        cell: Grid cell edge (m).
+        cell: Grid cell edge (m); coarsened when the targets are spread so thinly that the
+            grid would have many more cells than targets.
     """
     if not len(q_lo) or not len(t_lo):
         return _EMPTY, _EMPTY
-    inv = 1.0 / cell
-    big = ~(np.max(t_hi[:, :2] - t_lo[:, :2], axis=1) * inv < _MAX_SPAN)  # NaN, inf: big
+    big = ~(np.max(t_hi[:, :2] - t_lo[:, :2], axis=1) < _MAX_SPAN * cell)  # NaN, inf: big
     parts_q, parts_t = [], []
-    small = None
     if np.count_nonzero(big):  # huge boxes (a floor): against every query
         b = big.nonzero()[0]
         qi = np.repeat(np.arange(len(q_lo)), len(b))
         ti = np.tile(b, len(q_lo))
-        ok = _overlap(q_lo, q_hi, t_lo, t_hi, qi, ti)
-        parts_q.append(qi[ok])
-        parts_t.append(ti[ok])
-        small = (~big).nonzero()[0]
-        tc_lo = np.floor(t_lo[small, :2] * inv).astype(np.int64)
-        tc_hi = np.floor(t_hi[small, :2] * inv).astype(np.int64)
-    else:
-        tc_lo = np.floor(t_lo[:, :2] * inv).astype(np.int64)
-        tc_hi = np.floor(t_hi[:, :2] * inv).astype(np.int64)
-    if len(tc_lo):
-        # Query boxes are clipped to the targets' cells (none can meet a target outside
-        # them), so a huge one covers few cells.
-        first, last = tc_lo.min(axis=0) - 1, tc_hi.max(axis=0) + 1
-        qc_lo = np.floor(np.clip(q_lo[:, :2] * inv, first, last)).astype(np.int64)
-        qc_hi = np.floor(np.clip(q_hi[:, :2] * inv, first, last)).astype(np.int64)
-        np.maximum(qc_hi, qc_lo, out=qc_hi)
-        t_idx, t_x, t_y = _cover(tc_lo, tc_hi)
-        keys = t_x * _KEY + t_y
-        order = keys.argsort(kind="stable")
-        keys = keys[order]
-        t_idx = t_idx[order]
-        q_idx, q_x, q_y = _cover(qc_lo, qc_hi)
-        q_keys = q_x * _KEY + q_y
-        start = np.searchsorted(keys, q_keys, "left")
-        n = np.searchsorted(keys, q_keys, "right") - start
-        hit = n.nonzero()[0]
-        if len(hit):
-            q_idx, q_x, q_y, start, n = q_idx[hit], q_x[hit], q_y[hit], start[hit], n[hit]
-            qi = np.repeat(q_idx, n)
-            at = np.arange(len(qi)) - np.repeat(np.cumsum(n) - n - start, n)
-            tj = t_idx[at]  # index among the hashed targets
-            ti = tj if small is None else small[tj]
-            ok = _overlap(q_lo, q_hi, t_lo, t_hi, qi, ti)
-            # Keep a pair in one cell only: the one holding its overlap's lower corner.
-            ok &= np.repeat(q_x, n) == np.maximum(qc_lo[qi, 0], tc_lo[tj, 0])
-            ok &= np.repeat(q_y, n) == np.maximum(qc_lo[qi, 1], tc_lo[tj, 1])
-            parts_q.append(qi[ok])
-            parts_t.append(ti[ok])
-    if not parts_q:
-        return _EMPTY, _EMPTY
+        qi, ti = _overlap(q_lo, q_hi, t_lo, t_hi, qi, ti)
+        parts_q.append(qi)
+        parts_t.append(ti)
+    small = (~big).nonzero()[0]
+    if len(small):
+        qi, ti = _grid_pairs(q_lo, q_hi, t_lo, t_hi, small, cell)
+        parts_q.append(qi)
+        parts_t.append(ti)
     if len(parts_q) == 1:
         return parts_q[0], parts_t[0]
     return np.concatenate(parts_q), np.concatenate(parts_t)
+
+
+def _grid_pairs(
+    q_lo: np.ndarray,
+    q_hi: np.ndarray,
+    t_lo: np.ndarray,
+    t_hi: np.ndarray,
+    small: np.ndarray,
+    cell: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`box_pairs` for the targets ``small`` (each spanning few cells)."""
+    lo, hi = t_lo[small, :2], t_hi[small, :2]
+    centre = 0.5 * (lo + hi)
+    # A target reaching a query has its centre within the query grown by this (rounding
+    # covered by the slack).
+    reach = 0.5 * np.max(hi - lo, axis=0) * (1.0 + 1e-9) + 1e-9
+    origin = centre.min(axis=0)
+    extent = centre.max(axis=0) - origin
+    cells_wanted = 4 * len(small) + 1024
+    if (extent[0] / cell + 1) * (extent[1] / cell + 1) > cells_wanted:
+        cell = max(cell, float(np.sqrt(extent[0] * extent[1] / cells_wanted)) * 1.5)
+    inv = 1.0 / cell
+    n_x, n_y = int(extent[0] * inv) + 1, int(extent[1] * inv) + 1
+    cx = ((centre[:, 0] - origin[0]) * inv).astype(np.int64)
+    cy = ((centre[:, 1] - origin[1]) * inv).astype(np.int64)
+    key = cx * n_y + cy
+    n_cells = n_x * n_y
+    # Up to 65,536 cells the keys fit 16 bits, which numpy sorts by radix (linear time).
+    order = (key.astype(np.uint16) if n_cells <= 65536 else key).argsort(kind="stable")
+    count = np.bincount(key, minlength=n_cells)
+    first = np.cumsum(count) - count
+    by_cell = small[order]
+    # Each query's range of cells, clipped to the grid (outside it: nothing to meet).
+    top = np.array([n_x - 1, n_y - 1], dtype=float)
+    a = (q_lo[:, :2] - reach - origin) * inv
+    b = (q_hi[:, :2] + reach - origin) * inv
+    inside = np.all((b >= 0.0) & (a < top + 1.0), axis=1)
+    if not np.count_nonzero(inside):
+        return _EMPTY, _EMPTY
+    qs = inside.nonzero()[0]
+    c_lo = np.floor(np.clip(a[qs], 0.0, top)).astype(np.int64)
+    c_hi = np.floor(np.clip(b[qs], 0.0, top)).astype(np.int64)
+    q_idx, x, y = _cover(c_lo, c_hi)
+    k = x * n_y + y
+    n = count[k]
+    hit = n.nonzero()[0]
+    q_idx, k, n = qs[q_idx[hit]], k[hit], n[hit]
+    qi = np.repeat(q_idx, n)
+    at = np.arange(len(qi)) - np.repeat(np.cumsum(n) - n - first[k], n)
+    ti = by_cell[at]
+    return _overlap(q_lo, q_hi, t_lo, t_hi, qi, ti)
 
 
 def _grown(lo: np.ndarray, hi: np.ndarray, shift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -233,7 +259,10 @@ class FieldPairs:
         self._go = (np.concatenate((lo, static[0])), np.concatenate((hi, static[1])))
         ext = self._gf[1][:, :2] - self._gf[0][:, :2]
         self._cell = max(float(np.median(ext.max(axis=1))), 0.05) if len(ext) else 1.0
-        f, o = box_pairs(*self._gf, *self._go, self._cell)
+        f, o = box_pairs(*self._gf, lo, hi, self._cell)
+        if len(static[0]):  # the map's boxes in a grid of their own (their sizes differ)
+            fs, os_ = box_pairs(*self._gf, *static, self._cell)
+            f, o = np.concatenate((f, fs)), np.concatenate((o, os_ + len(lo)))
         keep = o != own[f]
         self.field, self.obstacle = f[keep], o[keep]
 

@@ -126,6 +126,44 @@ def test_a_map_is_few_static_bodies_that_robots_collide_with():
         assert any(robot in pair for pair in hits)
 
 
+def test_ignoring_static_collisions_leaves_the_map_out_but_not_the_robots():
+    # The default leaves every pair with a static body out, so the check does not hash the
+    # map's tile bodies at all; robots still meet each other among them.
+    with MultiRobotSimulationCore(headless_params(enable_floor=False)) as sim:
+        loaded = sim.load_map(DATA / "warehouse-small.map", resolution=0.5, tile=8.0)
+        box = ShapeParams("box", half_extents=[0.2, 0.2, 0.2])
+        a, b = (
+            Agent.from_mesh(
+                box,
+                box,
+                Pose.from_xyz(*loaded.cell_position(row, 4, 0.2)),
+                sim_core=sim,
+                controller="omni",
+            )
+            for row in (4, 0)
+        )
+        a.set_path([Pose.from_xyz(*loaded.cell_position(0, 4, 0.2))])  # through a shelf to b
+        hits = []
+        sim.events.on("collision_started", lambda obj_a, obj_b, **_: hits.append({obj_a, obj_b}))
+        for _ in range(40):
+            sim.step_once()
+        assert hits == [{a, b}]
+
+
+def test_the_movingai_warehouse_map_loads_with_its_shelves_and_aisles():
+    path = DATA / "warehouse-10-20-10-2-1.map"
+    assert path.read_text().splitlines()[:3] == ["type octile", "height 63", "width 161"]
+    grid = read_movingai_map(path, 1.0)
+    assert grid.occupied.shape == (63, 161)
+    assert int(grid.occupied.sum()) == 4444  # the border and 200 shelf blocks of 10 x 2
+    with MultiRobotSimulationCore(headless_params(enable_floor=False)) as sim:
+        loaded = sim.load_map(path)
+        assert len(loaded.lo) == 204  # one box per shelf block, four for the border
+        sizes = np.round(loaded.hi[:, :2] - loaded.lo[:, :2], 6)
+        assert int(np.count_nonzero((sizes == [10.0, 2.0]).all(axis=1))) == 200
+        assert len(loaded.free_cells()) == 63 * 161 - 4444
+
+
 def test_safety_fields_stop_a_robot_before_a_maps_shelf():
     with MultiRobotSimulationCore(headless_params(enable_floor=False)) as sim:
         loaded = sim.load_map(DATA / "warehouse-small.map", resolution=0.5)
