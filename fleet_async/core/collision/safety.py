@@ -105,10 +105,7 @@ class SafetyFields:
         self._opaque: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # rows, kept
         self._join = FieldPairs()
         self._layout = -1
-        self.evaluator = "pairs"
-        """How fields are evaluated: ``"pairs"`` (the pair list kept between steps,
-        ``safety_join.py``) or ``"reference"`` (the generic broad phase every step,
-        ``safety_reference.py``; slow, for tests). Both give the same results."""
+        self._evaluator = "pairs"
         self.recorder: Callable[..., None] | None = None
         """Called ``recorder(kind, object_id, **data)`` for each stop, end and deadlock (the
         simulation points it at ``sim.trace_event``, so a running trace logs them)."""
@@ -158,6 +155,19 @@ class SafetyFields:
     def enabled(self) -> bool:
         """Whether any agent has fields (otherwise the phase costs nothing)."""
         return len(self._table) > 0
+
+    @property
+    def evaluator(self) -> str:
+        """How fields are evaluated: ``"pairs"`` (the default: the pair list kept between
+        steps, ``safety_join.py``) or ``"reference"`` (the generic broad phase every step,
+        ``safety_reference.py``; slow, for tests). Both give the same results."""
+        return self._evaluator
+
+    @evaluator.setter
+    def evaluator(self, value: str) -> None:
+        if value not in ("pairs", "reference"):
+            raise ValueError(f"safety evaluator: expected 'pairs' or 'reference', got {value!r}")
+        self._evaluator = value
 
     @property
     def deadlock_after(self) -> float:
@@ -251,7 +261,7 @@ class SafetyFields:
     def _hits(self, shapes: FieldShapes, active: np.ndarray) -> Hits:
         """Every obstacle in an active field (see ``safety_join.py``)."""
         table, collision, world = self._table, self._collision, self._sim.world
-        if self.evaluator == "reference":
+        if self._evaluator == "reference":
             static = (self._static_lo, self._static_hi)
             return reference_hits(
                 table, collision, world, static, self._transparent, shapes, active

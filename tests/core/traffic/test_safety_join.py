@@ -92,6 +92,13 @@ def test_fast_fields_match_the_reference_bit_for_bit(seed):
         assert np.array_equal(a, b), f"poses differ at step {step + 1}"
 
 
+def test_an_unknown_evaluator_is_refused():
+    with MultiRobotSimulationCore(headless_params()) as sim:
+        with pytest.raises(ValueError, match="'fast'"):
+            sim.safety.evaluator = "fast"
+        assert sim.safety.evaluator == "pairs"
+
+
 def brute_pairs(q_lo, q_hi, t_lo, t_hi):
     ok = np.all(q_lo[:, None, :] <= t_hi[None, :, :], axis=2)
     ok &= np.all(t_lo[None, :, :] <= q_hi[:, None, :], axis=2)
