@@ -46,6 +46,7 @@ from fleet_async.core.motion.segments import (
     MotionLimits,
     axis_cap,
     heading_toward,
+    profile_terms,
     trapezoid_duration,
     trapezoid_progress,
 )
@@ -326,31 +327,35 @@ class KinematicEngine(SlotTable):
     def _start(self, slot: int, target_pos: np.ndarray, target_orn: np.ndarray) -> bool:
         """Begin a segment to (target_pos, target_orn); False if there is nothing to do.
 
-        Runs once per segment for one slot, so it works on Python floats: small numpy calls
-        would cost more than the arithmetic.
+        Runs once per segment for one slot, so it works on Python floats and writes the
+        segment's columns in one call: small numpy calls would cost more than the arithmetic.
         """
         row = self.row[slot]
         px, py, pz = self._store.position[row].tolist()
         ax, ay, az, aw = self._store.orientation[row].tolist()
         tx, ty, tz = np.asarray(target_pos, dtype=float).tolist()
-        bx, by, bz, bw = np.asarray(target_orn, dtype=float).tolist()
+        goal = np.asarray(target_orn, dtype=float).tolist()  # the orientation on arrival
+        bx, by, bz, bw = goal
         dx, dy, dz = tx - px, ty - py, tz - pz
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
         dot = ax * bx + ay * by + az * bz + aw * bw
-        self.q_goal[slot] = (bx, by, bz, bw)  # exactly as given: the orientation on arrival
         if dot < 0.0:  # shortest path: q and -q are the same rotation
             bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
         dot = min(dot, 1.0)
         sl_theta = math.acos(dot)
         theta = 2.0 * sl_theta  # rotation angle between the two orientations
         if length < EPS_LEN and theta < EPS_ANGLE:
+            self.q_goal[slot] = goal
             return False
         rate_v, rate_a = math.inf, math.inf
         if length >= EPS_LEN:
-            unit = np.array((dx / length, dy / length, dz / length))
-            scalar = bool(self.lin_scalar[slot])
-            rate_v = axis_cap(self.vmax[slot], scalar, unit) / length
-            rate_a = axis_cap(self.amax[slot], scalar, unit) / length
+            if self.lin_scalar[slot]:
+                rate_v = float(self.vmax[slot, 0]) / length
+                rate_a = float(self.amax[slot, 0]) / length
+            else:
+                unit = np.array((dx / length, dy / length, dz / length))
+                rate_v = axis_cap(self.vmax[slot], False, unit) / length
+                rate_a = axis_cap(self.amax[slot], False, unit) / length
         axis = (0.0, 0.0, 0.0)
         if theta >= EPS_ANGLE:
             # relative rotation q1 * conj(q0); its vector part is the axis times sin(theta / 2)
@@ -361,26 +366,27 @@ class KinematicEngine(SlotTable):
             axis = (
                 (rx / sin_half, ry / sin_half, rz / sin_half) if sin_half > 0 else (0.0, 0.0, 1.0)
             )
-            unit_axis = np.array(axis)
-            scalar = bool(self.ang_scalar[slot])
-            rate_v = min(rate_v, axis_cap(self.wmax[slot], scalar, unit_axis) / theta)
-            rate_a = min(rate_a, axis_cap(self.alpha[slot], scalar, unit_axis) / theta)
-        self.p0[slot] = (px, py, pz)
-        self.p1[slot] = (tx, ty, tz)
-        self.q0[slot] = (ax, ay, az, aw)
-        self.q1[slot] = (bx, by, bz, bw)
-        self.sl_dot[slot] = dot
-        self.sl_theta[slot] = sl_theta
-        self.sl_sin[slot] = math.sin(sl_theta)
-        self.theta[slot] = theta
-        self.axis[slot] = axis
+            if self.ang_scalar[slot]:
+                rate_v = min(rate_v, float(self.wmax[slot, 0]) / theta)
+                rate_a = min(rate_a, float(self.alpha[slot, 0]) / theta)
+            else:
+                unit_axis = np.array(axis)
+                rate_v = min(rate_v, axis_cap(self.wmax[slot], False, unit_axis) / theta)
+                rate_a = min(rate_a, axis_cap(self.alpha[slot], False, unit_axis) / theta)
         peak, t_acc, t_end = trapezoid_duration(rate_v, rate_a)
-        self.u[slot] = 0.0
-        self.steps[slot] = 0.0
-        self.u_peak[slot] = peak
-        self.u_t_acc[slot] = t_acc
-        self.u_t_end[slot] = t_end
-        self._derive(slot)
+        # In SEGMENT_COLUMNS' order; dp, the profile's terms and t_arrive as _derive has them.
+        self.write_segment(
+            slot,
+            [
+                *(px, py, pz, tx, ty, tz, dx, dy, dz),
+                *goal,
+                *(ax, ay, az, aw, bx, by, bz, bw),
+                *axis,
+                *(dot, sl_theta, math.sin(sl_theta), theta, 0.0, 0.0, peak, t_acc, t_end),
+                *profile_terms(peak, t_acc, t_end),
+                t_end - 1e-9,
+            ],
+        )
         self._set_mode(slot, POSE)
         return True
 
