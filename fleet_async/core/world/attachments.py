@@ -16,7 +16,11 @@ from typing import TYPE_CHECKING, Generic, TypeVar
 import numpy as np
 
 from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.geometry.quaternions import compose_poses_batch
+from fleet_async.core.geometry.quaternions import (
+    compose_poses_batch,
+    quat_multiply_batch,
+    rotate_vectors_batch,
+)
 from fleet_async.core.world.state import KinematicState
 
 if TYPE_CHECKING:
@@ -66,6 +70,11 @@ class AttachmentSet(Generic[_B]):
         ) = None
         # Per plan level: the parent and child poses the last pass saw (None: not yet).
         self._seen: list[tuple[np.ndarray, np.ndarray] | None] = []
+        # One child placed on its own (attach, set_pose of a carrier): the parent-frame offset
+        # and orientation by (parent orientation, relative pose), as compose_poses_batch gives
+        # them for one row. A fleet's carried objects mostly share both, and the batch
+        # functions cost far more than the arithmetic on one row.
+        self._one: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self.incremental = True
         """Recompute only the children whose parent or own pose changed since the last pass
         (False: every child every step, the reference the incremental pass is tested
@@ -199,13 +208,26 @@ class AttachmentSet(Generic[_B]):
     def place_child_only(self, att: Attachment[_B]) -> None:
         """Place one child from its parent link without recursing (the plan orders depths)."""
         parent_pos, parent_orn = self._parent_frame(att)
-        pos, orn = compose_poses_batch(
-            parent_pos[None, :],
-            parent_orn[None, :],
-            att.relative.position[None, :],
-            att.relative.orientation[None, :],
-        )
-        self._write(np.array([att.child.state_row]), pos, orn)
+        rel = att.relative
+        key = parent_orn.tobytes() + rel.position.tobytes() + rel.orientation.tobytes()
+        known = self._one.get(key)
+        if known is None:
+            if len(self._one) >= 1024:
+                self._one.clear()
+            # compose_poses_batch's own two products, for one row
+            parent_quat = parent_orn[None, :]
+            known = self._one[key] = (
+                rotate_vectors_batch(rel.position[None, :], parent_quat),
+                quat_multiply_batch(parent_quat, rel.orientation[None, :]),
+            )
+        offset, orn = known
+        pos = (parent_pos[None, :] + offset)[0].tolist()
+        store, row = self._store, att.child.state_row
+        quat = orn[0].tolist()
+        if store.position[row].tolist() != pos or store.orientation[row].tolist() != quat:
+            store.position[row] = pos
+            store.orientation[row] = quat
+            store.mark_moved(row)
 
     def _parent_frame(self, att: Attachment[_B]) -> tuple[np.ndarray, np.ndarray]:
         if att.link_index == -1:
