@@ -88,7 +88,13 @@ class ControllerParams:
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
         """Names of the fields (to split a config dict into params and extras)."""
-        return tuple(f.name for f in fields(cls))
+        names = _FIELD_NAMES.get(cls)
+        if names is None:
+            names = _FIELD_NAMES[cls] = tuple(f.name for f in fields(cls))
+        return names
+
+
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}  # a dataclass's fields never change
 
 
 class Controller(AttributeState):
