@@ -81,6 +81,13 @@ class _Plan:
     aligned: bool = False
 
 
+def _floats(values: np.ndarray | list[float]) -> list[float]:
+    """A pose part as Python floats (as float64 gives them)."""
+    if type(values) is list:
+        return values
+    return np.asarray(values, dtype=float).tolist()
+
+
 class KinematicEngine(SlotTable):
     """Moves every slot's row of the state store by its path or velocity command.
 
@@ -292,25 +299,27 @@ class KinematicEngine(SlotTable):
         """Start the slot's next segment, or finish its path."""
         plan = self._plans[slot]
         assert plan is not None
-        row = self.row[slot]
-        differential = self.kind[slot] == KIND_DIFFERENTIAL
+        row = self.row.item(slot)
+        store = self._store
+        # The pose as Python floats, read once: no segment start writes the store.
+        here = (store.position[row].tolist(), store.orientation[row].tolist())
+        differential = self.kind.item(slot) == KIND_DIFFERENTIAL
         while True:
             if plan.stage == _DRIVING:  # the segment to waypoints[0] has just ended
                 plan.waypoints.popleft()
                 plan.stage = _NONE
-            pos = self._store.position[row]
-            orn = self._store.orientation[row]
             if plan.waypoints:
                 target = plan.waypoints[0]
                 if differential and plan.stage == _NONE:
                     plan.stage = _TURNED
+                    pos, orn = store.position[row], store.orientation[row]
                     heading = heading_toward(plan.direction, pos, orn, target.position)
-                    if heading is not None and self._start(slot, pos, heading):
+                    if heading is not None and self._start(slot, here, pos, heading):
                         return
                     continue
                 plan.stage = _DRIVING
                 # Drive at the current orientation; the final one is reached by the turn below.
-                if self._start(slot, target.position, orn):
+                if self._start(slot, here, target.position, here[1]):
                     return
                 continue
             if plan.final_align and not plan.aligned:
@@ -318,23 +327,28 @@ class KinematicEngine(SlotTable):
                 final = plan.final_orientation
                 if differential:  # a ground robot aligns its heading only
                     final = quat_from_euler(0.0, 0.0, float(yaw_from_quats(final[None, :])[0]))
-                if self._start(slot, pos, final):
+                if self._start(slot, here, here[0], final):
                     return
                 continue
             self._finish(slot, reached=True)
             return
 
-    def _start(self, slot: int, target_pos: np.ndarray, target_orn: np.ndarray) -> bool:
-        """Begin a segment to (target_pos, target_orn); False if there is nothing to do.
+    def _start(
+        self,
+        slot: int,
+        here: tuple[list[float], list[float]],
+        target_pos: np.ndarray | list[float],
+        target_orn: np.ndarray | list[float],
+    ) -> bool:
+        """Begin a segment from ``here`` (the slot's position and orientation) to
+        (target_pos, target_orn); False if there is nothing to do.
 
         Runs once per segment for one slot, so it works on Python floats and writes the
         segment's columns in one call: small numpy calls would cost more than the arithmetic.
         """
-        row = self.row[slot]
-        px, py, pz = self._store.position[row].tolist()
-        ax, ay, az, aw = self._store.orientation[row].tolist()
-        tx, ty, tz = np.asarray(target_pos, dtype=float).tolist()
-        goal = np.asarray(target_orn, dtype=float).tolist()  # the orientation on arrival
+        (px, py, pz), (ax, ay, az, aw) = here
+        tx, ty, tz = _floats(target_pos)
+        goal = _floats(target_orn)  # the orientation on arrival
         bx, by, bz, bw = goal
         dx, dy, dz = tx - px, ty - py, tz - pz
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
