@@ -54,7 +54,7 @@ def _run(incremental: bool) -> list[bytes]:
                 + store.orientation[: store.high_water].tobytes()
             )
         assert np.allclose(totes[3].get_pose().position, [6.0 + 0.1, 0.0, 0.3])
-        assert not cup.get_pose().position.tolist() == [0.0, 0.0, 0.5]
+        assert cup.get_pose().position.tolist() != [0.0, 0.0, 0.5]
         return frames
     finally:
         sim.close()

@@ -146,10 +146,11 @@ def _build_chain(
         where = f"controller[{i}]" if isinstance(spec, list) else "controller"
         if isinstance(entry, dict) and "type" not in entry and "class" not in entry:
             entry = {"type": base_cls.motion_mode.value, **entry}  # params only: default base
+        ctrl: Any = entry
         if isinstance(entry, dict) and _is_base_entry(entry, where):
-            ctrl: Any = _base_entry({**defaults, **entry}, motion_mode, where)
-        else:
-            ctrl = create_controller(entry, where=where) if isinstance(entry, (str, dict)) else entry
+            ctrl = _base_entry({**defaults, **entry}, motion_mode, where)
+        elif isinstance(entry, (str, dict)):
+            ctrl = create_controller(entry, where=where)
         if not isinstance(ctrl, Controller):
             raise ValueError(f"{where}: expected a name, mapping or Controller, got {entry!r}")
         if ctrl.is_base:
