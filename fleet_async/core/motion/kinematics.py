@@ -44,9 +44,10 @@ from fleet_async.core.motion.segments import (
     EPS_ANGLE,
     EPS_LEN,
     MotionLimits,
-    axis_cap,
+    as_floats,
     heading_toward,
     profile_terms,
+    segment_rates,
     trapezoid_duration,
     trapezoid_progress,
 )
@@ -79,13 +80,6 @@ class _Plan:
     total: int
     stage: int = _NONE
     aligned: bool = False
-
-
-def _floats(values: np.ndarray | list[float]) -> list[float]:
-    """A pose part as Python floats (as float64 gives them)."""
-    if type(values) is list:
-        return values
-    return np.asarray(values, dtype=float).tolist()
 
 
 class KinematicEngine(SlotTable):
@@ -347,8 +341,8 @@ class KinematicEngine(SlotTable):
         segment's columns in one call: small numpy calls would cost more than the arithmetic.
         """
         (px, py, pz), (ax, ay, az, aw) = here
-        tx, ty, tz = _floats(target_pos)
-        goal = _floats(target_orn)  # the orientation on arrival
+        tx, ty, tz = as_floats(target_pos)
+        goal = as_floats(target_orn)  # the orientation on arrival
         bx, by, bz, bw = goal
         dx, dy, dz = tx - px, ty - py, tz - pz
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -363,13 +357,10 @@ class KinematicEngine(SlotTable):
             return False
         rate_v, rate_a = math.inf, math.inf
         if length >= EPS_LEN:
-            if self.lin_scalar[slot]:
-                rate_v = float(self.vmax[slot, 0]) / length
-                rate_a = float(self.amax[slot, 0]) / length
-            else:
-                unit = np.array((dx / length, dy / length, dz / length))
-                rate_v = axis_cap(self.vmax[slot], False, unit) / length
-                rate_a = axis_cap(self.amax[slot], False, unit) / length
+            unit = (dx / length, dy / length, dz / length)
+            rate_v, rate_a = segment_rates(
+                self.vmax[slot], self.amax[slot], self.lin_scalar.item(slot), unit, length
+            )
         axis = (0.0, 0.0, 0.0)
         if theta >= EPS_ANGLE:
             # relative rotation q1 * conj(q0); its vector part is the axis times sin(theta / 2)
@@ -380,13 +371,10 @@ class KinematicEngine(SlotTable):
             axis = (
                 (rx / sin_half, ry / sin_half, rz / sin_half) if sin_half > 0 else (0.0, 0.0, 1.0)
             )
-            if self.ang_scalar[slot]:
-                rate_v = min(rate_v, float(self.wmax[slot, 0]) / theta)
-                rate_a = min(rate_a, float(self.alpha[slot, 0]) / theta)
-            else:
-                unit_axis = np.array(axis)
-                rate_v = min(rate_v, axis_cap(self.wmax[slot], False, unit_axis) / theta)
-                rate_a = min(rate_a, axis_cap(self.alpha[slot], False, unit_axis) / theta)
+            turn_v, turn_a = segment_rates(
+                self.wmax[slot], self.alpha[slot], self.ang_scalar.item(slot), axis, theta
+            )
+            rate_v, rate_a = min(rate_v, turn_v), min(rate_a, turn_a)
         peak, t_acc, t_end = trapezoid_duration(rate_v, rate_a)
         # In SEGMENT_COLUMNS' order; dp, the profile's terms and t_arrive as _derive has them.
         self.write_segment(
