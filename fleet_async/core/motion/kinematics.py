@@ -380,13 +380,13 @@ class KinematicEngine(SlotTable):
         self.write_segment(
             slot,
             [
-                *(px, py, pz, tx, ty, tz, dx, dy, dz),
-                *goal,
-                *(ax, ay, az, aw, bx, by, bz, bw),
-                *axis,
-                *(dot, sl_theta, math.sin(sl_theta), theta, 0.0, 0.0, peak, t_acc, t_end),
+                *(0.0, 0.0, t_end - 1e-9, t_end),  # u, steps, t_arrive, u_t_end
                 *profile_terms(peak, t_acc, t_end),
-                t_end - 1e-9,
+                *(px, py, pz, dx, dy, dz, tx, ty, tz, theta),  # p0, dp, p1, theta
+                *(ax, ay, az, aw, bx, by, bz, bw),  # q0, q1
+                *goal,  # q_goal
+                *axis,
+                *(dot, sl_theta, math.sin(sl_theta), peak, t_acc),
             ],
         )
         self._set_mode(slot, POSE)

@@ -98,30 +98,11 @@ PROFILE_AT = slice(_START[PROFILE_TERMS[0]], _START[PROFILE_TERMS[-1]] + 1)
 """The profile's terms, in trapezoid_progress's order."""
 
 
-SEGMENT_COLUMNS = (
-    "p0",
-    "p1",
-    "dp",
-    "q_goal",
-    "q0",
-    "q1",
-    "axis",
-    "sl_dot",
-    "sl_theta",
-    "sl_sin",
-    "theta",
-    "u",
-    "steps",
-    "u_peak",
-    "u_t_acc",
-    "u_t_end",
-    *PROFILE_TERMS,
-    "t_arrive",
-)
-"""The columns a segment's start writes (``SlotTable.write_segment``), in its values' order."""
-_SEGMENT_INDEX = np.concatenate(
-    [np.arange(_START[name], _START[name] + _WIDTHS[name]) for name in SEGMENT_COLUMNS]
-)
+SEGMENT_COLUMNS = (*_MOVE, *_TURN, "u_peak", "u_t_acc")
+"""The columns a segment's start writes (``SlotTable.write_segment``), in their order in the
+matrix: the first rows of it, so that one slot's segment is one strided write."""
+_SEGMENT_END = sum(_WIDTHS[name] for name in SEGMENT_COLUMNS)
+assert tuple(_WIDTHS)[: len(SEGMENT_COLUMNS)] == SEGMENT_COLUMNS
 
 _XYZ = np.arange(3)[:, None]
 
@@ -242,7 +223,7 @@ class SlotTable:
         """Write a starting segment's columns (``SEGMENT_COLUMNS``, derived ones included) in
         one call: a slot starts segments in Python, where each numpy write costs more than
         the arithmetic."""
-        self._floats[_SEGMENT_INDEX, slot] = values
+        self._floats[:_SEGMENT_END, slot] = values
 
     def _derive(self, slot: int) -> None:
         """Work out a slot's derived columns (``_DERIVED``) from its segment's columns."""
