@@ -212,8 +212,12 @@ class KinematicEngine(SlotTable):
     def moving_mask(self, slots: np.ndarray) -> np.ndarray:
         """Whether each of ``slots`` is moving: :meth:`is_moving` for many slots at once."""
         mode = self.mode[slots]
-        turning = self.vel[slots].any(axis=1) | self.cmd[slots].any(axis=1)
-        return (mode == POSE) | ((mode == VELOCITY) & turning)
+        moving = mode == POSE
+        velocity = mode == VELOCITY
+        if velocity.any():  # rare: the velocity columns only for slots under a command
+            s = slots[velocity]
+            moving[velocity] = self.vel[s].any(axis=1) | self.cmd[s].any(axis=1)
+        return moving
 
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""
@@ -334,12 +338,9 @@ class KinematicEngine(SlotTable):
         target_pos: np.ndarray | list[float],
         target_orn: np.ndarray | list[float],
     ) -> bool:
-        """Begin a segment from ``here`` (the slot's position and orientation) to
-        (target_pos, target_orn); False if there is nothing to do.
-
-        Runs once per segment for one slot, so it works on Python floats and writes the
-        segment's columns in one call: small numpy calls would cost more than the arithmetic.
-        """
+        """Begin a segment from ``here`` (the slot's position and orientation) to (target_pos,
+        target_orn); False if there is nothing to do. Runs once per segment for one slot, so
+        it works on Python floats: small numpy calls would cost more than the arithmetic."""
         (px, py, pz), (ax, ay, az, aw) = here
         tx, ty, tz = as_floats(target_pos)
         goal = as_floats(target_orn)  # the orientation on arrival
