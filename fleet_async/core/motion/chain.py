@@ -35,14 +35,15 @@ _CHAIN_CACHE_SIZE = 256
 _PLAIN = frozenset({str, int, float, bool, type(None), MotionMode, MovementDirection})
 
 
-def _plain_items(mapping: dict[str, Any] | None) -> tuple[tuple[str, Any], ...] | None:
-    """The mapping's items when every value is a plain scalar, else None."""
+def _plain_items(mapping: dict[str, Any] | None) -> tuple[tuple[str, type, Any], ...] | None:
+    """The mapping's items with each value's type (True == 1 == 1.0 as keys, but only 1.0 is
+    a valid limit) when every value is a plain scalar, else None."""
     if not mapping:
         return ()
     for value in mapping.values():
         if type(value) not in _PLAIN:
             return None
-    return tuple(mapping.items())
+    return tuple((key, type(value), value) for key, value in mapping.items())
 
 
 def _chain_key(
