@@ -212,7 +212,7 @@ class KinematicState:
                 getattr(self, name).nbytes
                 for name in (*self._FLOAT_COLUMNS, "body_id", "object_id", "collision_mode")
             )
-            + 4 * self.capacity
+            + 5 * self.capacity  # the bool columns: kinematic, active, dirty, moved, written
         )
 
     def _reserve(self, needed: int) -> None:
