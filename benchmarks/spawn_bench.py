@@ -55,36 +55,50 @@ def main(argv: list[str] | None = None) -> int:
     model = args.model or str(HERE.parent / "fleet_async" / "data" / "robots" / "mobile_robot.urdf")
     incumbent = None if args.incumbent is None else str(Path(args.incumbent) / "bin" / "python")
     for n in args.n:
-        ours: list[float] = []
-        bodies: list[float] = []
-        theirs: list[float] = []
+        ours: list[dict[str, Any]] = []
+        theirs: list[dict[str, Any]] = []
         for _ in range(args.repeat):  # interleaved, so both sides see the same machine
-            mine = run_one(sys.executable, "fleet_async", n, args.kind, model)
-            ours.append(mine["spawn_s"])
-            bodies.append(mine["bodies_s"])
+            ours.append(run_one(sys.executable, "fleet_async", n, args.kind, model))
             if incumbent is not None:
-                theirs.append(run_one(incumbent, "pybullet_fleet", n, args.kind, model)["spawn_s"])
+                theirs.append(run_one(incumbent, "pybullet_fleet", n, args.kind, model))
         row: dict[str, Any] = {
             "n": n,
             "kind": args.kind,
-            "fleet_async_s": ours,
-            "fleet_async_bodies_s": bodies,
+            "fleet_async_s": [r["spawn_s"] for r in ours],
+            "fleet_async_cpu_s": [r["spawn_cpu_s"] for r in ours],
+            "fleet_async_bodies_s": [r["bodies_s"] for r in ours],
         }
         if theirs:
-            row["incumbent_s"] = theirs
-            row["speedup_median"] = statistics.median(theirs) / statistics.median(ours)
+            row["incumbent_s"] = [r["spawn_s"] for r in theirs]
+            row["incumbent_cpu_s"] = [r["spawn_cpu_s"] for r in theirs]
+            for key in ("s", "cpu_s"):
+                mine, other = row[f"fleet_async_{key}"], row[f"incumbent_{key}"]
+                row[f"speedup_median_{key}"] = statistics.median(other) / statistics.median(mine)
+                row[f"speedup_pairs_{key}"] = statistics.median(
+                    t / o for o, t in zip(mine, other, strict=True)
+                )
+            row["speedup_median"] = row["speedup_median_s"]
         if args.json:
             print(json.dumps(row), flush=True)
             continue
-        text = f"N={n:>7} {args.kind}: fleet_async {statistics.median(ours):7.3f} s"
-        text += f" (runs {', '.join(f'{t:.3f}' for t in ours)};"
-        text += f" +bodies {statistics.median(bodies):.3f} s)"
-        if theirs:
-            text += f"  incumbent {statistics.median(theirs):7.3f} s"
-            text += f" (runs {', '.join(f'{t:.3f}' for t in theirs)})"
-            text += f"  speed-up {row['speedup_median']:.1f}x"
-        print(text, flush=True)
+        print(_report(row, theirs != []), flush=True)
     return 0
+
+
+def _report(row: dict[str, Any], incumbent: bool) -> str:
+    def runs(key: str) -> str:
+        values = row[key]
+        return f"{statistics.median(values):7.3f} s (runs {', '.join(f'{t:.3f}' for t in values)})"
+
+    text = f"N={row['n']:>7} {row['kind']}: fleet_async {runs('fleet_async_s')}, CPU"
+    text += f" {runs('fleet_async_cpu_s')}; +bodies"
+    text += f" {statistics.median(row['fleet_async_bodies_s']):.3f} s"
+    if incumbent:
+        text += f"\n          incumbent {runs('incumbent_s')}, CPU {runs('incumbent_cpu_s')}"
+        text += f"\n          speed-up: wall {row['speedup_median_s']:.1f}x of the medians,"
+        text += f" {row['speedup_pairs_s']:.1f}x per pair; CPU {row['speedup_median_cpu_s']:.1f}x"
+        text += f" of the medians, {row['speedup_pairs_cpu_s']:.1f}x per pair"
+    return text
 
 
 if __name__ == "__main__":

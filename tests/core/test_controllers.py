@@ -806,3 +806,16 @@ def test_woken_controllers_match_polling_and_let_idle_steps_skip(sim):
             assert a.get_pose().orientation.tolist() == b.get_pose().orientation.tolist()
     finally:
         other.close()
+
+
+def test_a_cached_chain_never_stands_in_for_an_equal_but_invalid_value(sim):
+    # True == 1 == 1.0: a chain cached for a valid 1.0 must not answer for True.
+    good = {"type": "omni", "max_linear_vel": 1.0}
+    Agent.from_mesh(visual_shape=BOX, collision_shape=BOX, sim_core=sim, controller=good)
+    Agent.from_mesh(visual_shape=BOX, collision_shape=BOX, sim_core=sim, controller=[good])
+    for spec in (
+        {"type": "omni", "max_linear_vel": True},
+        [{"type": "omni", "max_linear_vel": True}],
+    ):
+        with pytest.raises(ValueError, match="max_linear_vel"):
+            Agent.from_mesh(visual_shape=BOX, collision_shape=BOX, sim_core=sim, controller=spec)

@@ -53,6 +53,10 @@ class ActionQueue:
         """Number of actions waiting behind the current one."""
         return len(self._queued.get(agent.object_id, ()))
 
+    def waits_on_motion(self, agent: ActingAgent) -> bool:
+        """Whether ``agent``'s current action waits for its motion to end."""
+        return agent.object_id in self._on_motion
+
     def is_idle(self, agent: ActingAgent) -> bool:
         """No current action and nothing queued."""
         return agent.object_id not in self._current and not self._queued.get(agent.object_id)

@@ -44,6 +44,8 @@ logger = logging.getLogger(__name__)
 
 
 def _waypoints(path: Any) -> list[Pose]:
+    if type(path) is list and path and all(type(w) is Pose for w in path):
+        return list(path)  # the common case, checked first
     if isinstance(path, Path):
         waypoints = list(path.waypoints)
     elif isinstance(path, Pose):

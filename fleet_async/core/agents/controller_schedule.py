@@ -27,6 +27,7 @@ from fleet_async.core.motion.controllers import KinematicController
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
+    from fleet_async.core.motion.controllers import Controller
     from fleet_async.core.motion.kinematics import KinematicEngine
 
 __all__ = ["ControllerSchedule"]
@@ -56,6 +57,7 @@ class ControllerSchedule:
         self._every: dict[int, Agent] = {}
         self._woken: dict[int, Agent] = {}
         self._agents: list[Agent] = []
+        self._chains: list[tuple[Controller, ...]] = []
         self._slots = np.zeros(0, dtype=np.int64)
         self._wakes = np.zeros(0)
         self._stale = False
@@ -117,11 +119,23 @@ class ControllerSchedule:
         if not len(due):
             return
         due = due[~engine.moving_mask(self._slots[due])]
-        agents, wakes = self._agents, self._wakes
+        agents, chains, wakes = self._agents, self._chains, self._wakes
         for k in due.tolist():
             agent = agents[k]
-            agent.step_controllers(dt)
-            wake = _wake(agent)
+            if self._stale:  # a controller changed a chain: read every chain afresh
+                agent.step_controllers(dt)
+                wake = _wake(agent)
+            else:  # what step_controllers and _wake do for a woken agent's chain
+                chain = chains[k]
+                for ctrl in chain:
+                    ctrl.compute(agent, dt)
+                wake = math.inf
+                for ctrl in chain:
+                    when = ctrl.wake_time()
+                    if when is None:
+                        wake = None
+                        break
+                    wake = min(wake, when)
             wakes[k] = -math.inf if wake is None else wake
 
     def idle_steps(self, step: int, dt: float, limit: int) -> int:
@@ -147,6 +161,8 @@ class ControllerSchedule:
     def _rebuild(self) -> None:
         agents = list(self._woken.values())
         self._agents = agents
+        # A woken agent's base is a built-in controller: a step calls its high-level ones.
+        self._chains = [tuple(a.controllers[1:]) for a in agents]
         self._slots = np.array([a.motion_slot for a in agents], dtype=np.int64)
         wakes = [_wake(a) for a in agents]
         self._wakes = np.array([-math.inf if w is None else w for w in wakes])

@@ -225,6 +225,8 @@ class FleetMotion:
 
     def wake_action(self, agent: Agent) -> None:
         """Let the action ``agent`` waits on check its condition again (its joints moved)."""
+        if not self.actions.waits_on_motion(agent):
+            return
         now = self._sim.sim_time + self._dt if self._sim.in_step else self._sim.sim_time
         self.actions.on_motion_end(agent, now, self._dt)
 

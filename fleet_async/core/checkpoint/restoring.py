@@ -133,6 +133,7 @@ def _restore_objects(sim: SimulationKernel, state: dict[str, Any]) -> None:
     for name in ROW_COLUMNS:
         getattr(store, name)[rows] = state["rows"][name]
     store.dirty[rows] = True
+    store.written[rows] = True  # carried objects follow the restored poses
     sim.sync_pybullet()
 
 

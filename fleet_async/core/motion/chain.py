@@ -35,14 +35,15 @@ _CHAIN_CACHE_SIZE = 256
 _PLAIN = frozenset({str, int, float, bool, type(None), MotionMode, MovementDirection})
 
 
-def _plain_items(mapping: dict[str, Any] | None) -> tuple[tuple[str, Any], ...] | None:
-    """The mapping's items when every value is a plain scalar, else None."""
+def _plain_items(mapping: dict[str, Any] | None) -> tuple[tuple[str, type, Any], ...] | None:
+    """The mapping's items with each value's type (True == 1 == 1.0 as keys, but only 1.0 is
+    a valid limit) when every value is a plain scalar, else None."""
     if not mapping:
         return ()
     for value in mapping.values():
         if type(value) not in _PLAIN:
             return None
-    return tuple(mapping.items())
+    return tuple((key, type(value), value) for key, value in mapping.items())
 
 
 def _chain_key(
@@ -81,25 +82,49 @@ def build_controller_chain(
     if key is not None:
         hit = _CHAIN_CACHE.get(key)
         if hit is not None:
-            cls, params, separation = hit
-            if cls is DifferentialController:
-                return [DifferentialController(_copy_params(params), wheel_separation=separation)]
-            return [cls(_copy_params(params))]
+            return [_from_cache(hit)]
     chain = _build_chain(spec, motion_mode, defaults)
-    base = chain[0]
+    if key is not None and len(chain) == 1:
+        _remember(key, chain[0], motion_mode)
+    return chain
+
+
+def _from_cache(hit: tuple[type[KinematicController], ControllerParams, float]) -> Controller:
+    cls, params, separation = hit
+    if cls is DifferentialController:
+        return DifferentialController(_copy_params(params), wheel_separation=separation)
+    return cls(_copy_params(params))
+
+
+def _remember(key: tuple[Any, ...], base: Controller, motion_mode: MotionMode) -> None:
+    """Cache a built-in base built from a plain spec (not a mismatch that warns each time)."""
     kind: type[KinematicController] | None = (
         OmniController
         if type(base) is OmniController
         else DifferentialController
         if type(base) is DifferentialController and motion_mode is not MotionMode.OMNIDIRECTIONAL
-        else None  # other classes, or a mismatch that warns each time
+        else None
     )
-    if key is not None and len(chain) == 1 and kind is not None:
-        if len(_CHAIN_CACHE) >= _CHAIN_CACHE_SIZE:
-            _CHAIN_CACHE.clear()
-        separation = float(getattr(base, "wheel_separation", 0.0))
-        _CHAIN_CACHE[key] = (kind, _copy_params(base.params), separation)
-    return chain
+    if kind is None:
+        return
+    if len(_CHAIN_CACHE) >= _CHAIN_CACHE_SIZE:
+        _CHAIN_CACHE.clear()
+    separation = float(getattr(base, "wheel_separation", 0.0))
+    _CHAIN_CACHE[key] = (kind, _copy_params(base.params), separation)
+
+
+def _base_entry(entry: dict[str, Any], motion_mode: MotionMode, where: str) -> Controller:
+    """The base controller of one mapping of a list spec (cached like a whole plain spec)."""
+    items = _plain_items(entry)
+    key = None if items is None else (motion_mode, "entry", items)
+    if key is not None:
+        hit = _CHAIN_CACHE.get(key)
+        if hit is not None:
+            return _from_cache(hit)
+    ctrl = create_controller(entry, where=where)
+    if key is not None:
+        _remember(key, ctrl, motion_mode)
+    return ctrl
 
 
 def _build_chain(
@@ -122,9 +147,11 @@ def _build_chain(
         where = f"controller[{i}]" if isinstance(spec, list) else "controller"
         if isinstance(entry, dict) and "type" not in entry and "class" not in entry:
             entry = {"type": base_cls.motion_mode.value, **entry}  # params only: default base
-        if isinstance(entry, dict):
-            entry = {**defaults, **entry} if _is_base_entry(entry, where) else entry
-        ctrl = create_controller(entry, where=where) if isinstance(entry, (str, dict)) else entry
+        ctrl: Any = entry
+        if isinstance(entry, dict) and _is_base_entry(entry, where):
+            ctrl = _base_entry({**defaults, **entry}, motion_mode, where)
+        elif isinstance(entry, (str, dict)):
+            ctrl = create_controller(entry, where=where)
         if not isinstance(ctrl, Controller):
             raise ValueError(f"{where}: expected a name, mapping or Controller, got {entry!r}")
         if ctrl.is_base:

@@ -88,7 +88,13 @@ class ControllerParams:
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
         """Names of the fields (to split a config dict into params and extras)."""
-        return tuple(f.name for f in fields(cls))
+        names = _FIELD_NAMES.get(cls)
+        if names is None:
+            names = _FIELD_NAMES[cls] = tuple(f.name for f in fields(cls))
+        return names
+
+
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}  # a dataclass's fields never change
 
 
 class Controller(AttributeState):
@@ -367,18 +373,22 @@ class RandomWalkController(Controller):
 
     def compute(self, agent: ControlledAgent, dt: float) -> None:
         """Pick a new point once the agent has stopped and waited."""
-        if agent.is_moving or agent.get_current_action() is not None or self._rng is None:
+        rng = self._rng
+        if rng is None or agent.is_moving or agent.get_current_action() is not None:
             return
         now = agent.sim_core.sim_time if agent.sim_core is not None else 0.0
+        # Each draw is Generator.uniform(low, high)'s own formula, low + (high - low) * d, on
+        # the stream's next double d (the same bits, a third of the call's cost).
         if self._moved:
             self._moved = False
-            self._waiting_until = now + float(self._rng.uniform(*self.wait_range))
+            lo, hi = self.wait_range
+            self._waiting_until = now + (lo + (hi - lo) * rng.random())
         if self._waiting_until is not None and now + 1e-9 < self._waiting_until:
             return
         self._waiting_until = None
         assert self.center is not None
-        angle = self._rng.uniform(0.0, 2.0 * math.pi)
-        dist = self.radius * math.sqrt(self._rng.uniform())
+        angle = 2.0 * math.pi * rng.random()  # uniform(0, 2 pi)
+        dist = self.radius * math.sqrt(rng.random())  # uniform()
         target = self.center + np.array([dist * math.cos(angle), dist * math.sin(angle), 0.0])
         target[2] = agent.get_pose().z
         agent.set_goal_pose(Pose(target))

@@ -44,8 +44,10 @@ from fleet_async.core.motion.segments import (
     EPS_ANGLE,
     EPS_LEN,
     MotionLimits,
-    axis_cap,
+    as_floats,
     heading_toward,
+    profile_terms,
+    segment_rates,
     trapezoid_duration,
     trapezoid_progress,
 )
@@ -210,8 +212,12 @@ class KinematicEngine(SlotTable):
     def moving_mask(self, slots: np.ndarray) -> np.ndarray:
         """Whether each of ``slots`` is moving: :meth:`is_moving` for many slots at once."""
         mode = self.mode[slots]
-        turning = self.vel[slots].any(axis=1) | self.cmd[slots].any(axis=1)
-        return (mode == POSE) | ((mode == VELOCITY) & turning)
+        moving = mode == POSE
+        velocity = mode == VELOCITY
+        if velocity.any():  # rare: the velocity columns only for slots under a command
+            s = slots[velocity]
+            moving[velocity] = self.vel[s].any(axis=1) | self.cmd[s].any(axis=1)
+        return moving
 
     def remaining_waypoints(self, slot: int) -> list[Pose]:
         """Waypoints not reached yet (the current target first)."""
@@ -291,25 +297,27 @@ class KinematicEngine(SlotTable):
         """Start the slot's next segment, or finish its path."""
         plan = self._plans[slot]
         assert plan is not None
-        row = self.row[slot]
-        differential = self.kind[slot] == KIND_DIFFERENTIAL
+        row = self.row.item(slot)
+        store = self._store
+        # The pose as Python floats, read once: no segment start writes the store.
+        here = (store.position[row].tolist(), store.orientation[row].tolist())
+        differential = self.kind.item(slot) == KIND_DIFFERENTIAL
         while True:
             if plan.stage == _DRIVING:  # the segment to waypoints[0] has just ended
                 plan.waypoints.popleft()
                 plan.stage = _NONE
-            pos = self._store.position[row]
-            orn = self._store.orientation[row]
             if plan.waypoints:
                 target = plan.waypoints[0]
                 if differential and plan.stage == _NONE:
                     plan.stage = _TURNED
+                    pos, orn = store.position[row], store.orientation[row]
                     heading = heading_toward(plan.direction, pos, orn, target.position)
-                    if heading is not None and self._start(slot, pos, heading):
+                    if heading is not None and self._start(slot, here, pos, heading):
                         return
                     continue
                 plan.stage = _DRIVING
                 # Drive at the current orientation; the final one is reached by the turn below.
-                if self._start(slot, target.position, orn):
+                if self._start(slot, here, target.position, here[1]):
                     return
                 continue
             if plan.final_align and not plan.aligned:
@@ -317,40 +325,43 @@ class KinematicEngine(SlotTable):
                 final = plan.final_orientation
                 if differential:  # a ground robot aligns its heading only
                     final = quat_from_euler(0.0, 0.0, float(yaw_from_quats(final[None, :])[0]))
-                if self._start(slot, pos, final):
+                if self._start(slot, here, here[0], final):
                     return
                 continue
             self._finish(slot, reached=True)
             return
 
-    def _start(self, slot: int, target_pos: np.ndarray, target_orn: np.ndarray) -> bool:
-        """Begin a segment to (target_pos, target_orn); False if there is nothing to do.
-
-        Runs once per segment for one slot, so it works on Python floats: small numpy calls
-        would cost more than the arithmetic.
-        """
-        row = self.row[slot]
-        px, py, pz = self._store.position[row].tolist()
-        ax, ay, az, aw = self._store.orientation[row].tolist()
-        tx, ty, tz = np.asarray(target_pos, dtype=float).tolist()
-        bx, by, bz, bw = np.asarray(target_orn, dtype=float).tolist()
+    def _start(
+        self,
+        slot: int,
+        here: tuple[list[float], list[float]],
+        target_pos: np.ndarray | list[float],
+        target_orn: np.ndarray | list[float],
+    ) -> bool:
+        """Begin a segment from ``here`` (the slot's position and orientation) to (target_pos,
+        target_orn); False if there is nothing to do. Runs once per segment for one slot, so
+        it works on Python floats: small numpy calls would cost more than the arithmetic."""
+        (px, py, pz), (ax, ay, az, aw) = here
+        tx, ty, tz = as_floats(target_pos)
+        goal = as_floats(target_orn)  # the orientation on arrival
+        bx, by, bz, bw = goal
         dx, dy, dz = tx - px, ty - py, tz - pz
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
         dot = ax * bx + ay * by + az * bz + aw * bw
-        self.q_goal[slot] = (bx, by, bz, bw)  # exactly as given: the orientation on arrival
         if dot < 0.0:  # shortest path: q and -q are the same rotation
             bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
         dot = min(dot, 1.0)
         sl_theta = math.acos(dot)
         theta = 2.0 * sl_theta  # rotation angle between the two orientations
         if length < EPS_LEN and theta < EPS_ANGLE:
+            self.q_goal[slot] = goal
             return False
         rate_v, rate_a = math.inf, math.inf
         if length >= EPS_LEN:
-            unit = np.array((dx / length, dy / length, dz / length))
-            scalar = bool(self.lin_scalar[slot])
-            rate_v = axis_cap(self.vmax[slot], scalar, unit) / length
-            rate_a = axis_cap(self.amax[slot], scalar, unit) / length
+            unit = (dx / length, dy / length, dz / length)
+            rate_v, rate_a = segment_rates(
+                self.vmax[slot], self.amax[slot], self.lin_scalar.item(slot), unit, length
+            )
         axis = (0.0, 0.0, 0.0)
         if theta >= EPS_ANGLE:
             # relative rotation q1 * conj(q0); its vector part is the axis times sin(theta / 2)
@@ -361,26 +372,24 @@ class KinematicEngine(SlotTable):
             axis = (
                 (rx / sin_half, ry / sin_half, rz / sin_half) if sin_half > 0 else (0.0, 0.0, 1.0)
             )
-            unit_axis = np.array(axis)
-            scalar = bool(self.ang_scalar[slot])
-            rate_v = min(rate_v, axis_cap(self.wmax[slot], scalar, unit_axis) / theta)
-            rate_a = min(rate_a, axis_cap(self.alpha[slot], scalar, unit_axis) / theta)
-        self.p0[slot] = (px, py, pz)
-        self.p1[slot] = (tx, ty, tz)
-        self.q0[slot] = (ax, ay, az, aw)
-        self.q1[slot] = (bx, by, bz, bw)
-        self.sl_dot[slot] = dot
-        self.sl_theta[slot] = sl_theta
-        self.sl_sin[slot] = math.sin(sl_theta)
-        self.theta[slot] = theta
-        self.axis[slot] = axis
+            turn_v, turn_a = segment_rates(
+                self.wmax[slot], self.alpha[slot], self.ang_scalar.item(slot), axis, theta
+            )
+            rate_v, rate_a = min(rate_v, turn_v), min(rate_a, turn_a)
         peak, t_acc, t_end = trapezoid_duration(rate_v, rate_a)
-        self.u[slot] = 0.0
-        self.steps[slot] = 0.0
-        self.u_peak[slot] = peak
-        self.u_t_acc[slot] = t_acc
-        self.u_t_end[slot] = t_end
-        self._derive(slot)
+        # In SEGMENT_COLUMNS' order; dp, the profile's terms and t_arrive as _derive has them.
+        self.write_segment(
+            slot,
+            [
+                *(0.0, 0.0, t_end - 1e-9, t_end),  # u, steps, t_arrive, u_t_end
+                *profile_terms(peak, t_acc, t_end),
+                *(px, py, pz, dx, dy, dz, tx, ty, tz, theta),  # p0, dp, p1, theta
+                *(ax, ay, az, aw, bx, by, bz, bw),  # q0, q1
+                *goal,  # q_goal
+                *axis,
+                *(dot, sl_theta, math.sin(sl_theta), peak, t_acc),
+            ],
+        )
         self._set_mode(slot, POSE)
         return True
 

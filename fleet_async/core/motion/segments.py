@@ -21,10 +21,12 @@ __all__ = [
     "EPS_LEN",
     "PROFILE_TERMS",
     "MotionLimits",
+    "as_floats",
     "axis_cap",
     "checked_limit",
     "heading_toward",
     "profile_terms",
+    "segment_rates",
     "trapezoid_duration",
     "trapezoid_progress",
 ]
@@ -150,3 +152,21 @@ def axis_cap(limit: np.ndarray, scalar: bool, direction: np.ndarray) -> float:
     ratios = np.abs(direction) / limit
     worst = float(ratios.max())
     return math.inf if worst == 0.0 else 1.0 / worst
+
+
+def segment_rates(
+    limit: np.ndarray, accel: np.ndarray, scalar: bool, direction: tuple[float, ...], span: float
+) -> tuple[float, float]:
+    """Largest rate and acceleration of ``u`` (1/s, 1/s^2) for a segment that covers ``span``
+    (m, or rad for a turn) along unit ``direction`` within a scalar or per-axis limit pair."""
+    if scalar:
+        return float(limit[0]) / span, float(accel[0]) / span
+    unit = np.array(direction)
+    return axis_cap(limit, False, unit) / span, axis_cap(accel, False, unit) / span
+
+
+def as_floats(values: np.ndarray | list[float]) -> list[float]:
+    """A pose part (position or quaternion) as Python floats, as float64 gives them."""
+    if type(values) is list:
+        return values
+    return np.asarray(values, dtype=float).tolist()

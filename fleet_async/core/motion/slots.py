@@ -23,6 +23,7 @@ __all__ = [
     "IDLE",
     "POSE",
     "PROFILE_AT",
+    "SEGMENT_COLUMNS",
     "VELOCITY",
     "SlotTable",
     "flat_rows",
@@ -96,6 +97,12 @@ AT: dict[str, slice | int] = {
 PROFILE_AT = slice(_START[PROFILE_TERMS[0]], _START[PROFILE_TERMS[-1]] + 1)
 """The profile's terms, in trapezoid_progress's order."""
 
+
+SEGMENT_COLUMNS = (*_MOVE, *_TURN, "u_peak", "u_t_acc")
+"""The columns a segment's start writes (``SlotTable.write_segment``), in their order in the
+matrix: the first rows of it, so that one slot's segment is one strided write."""
+_SEGMENT_END = sum(_WIDTHS[name] for name in SEGMENT_COLUMNS)
+assert tuple(_WIDTHS)[: len(SEGMENT_COLUMNS)] == SEGMENT_COLUMNS
 
 _XYZ = np.arange(3)[:, None]
 
@@ -211,6 +218,12 @@ class SlotTable:
         rows = self.row  # every slot's, so a slot added during the step has an entry
         known = (rows >= 0) & (rows < len(scale_of_row))
         self._scale = np.where(known, scale_of_row[np.where(known, rows, 0)], 1.0)
+
+    def write_segment(self, slot: int, values: list[float]) -> None:
+        """Write a starting segment's columns (``SEGMENT_COLUMNS``, derived ones included) in
+        one call: a slot starts segments in Python, where each numpy write costs more than
+        the arithmetic."""
+        self._floats[:_SEGMENT_END, slot] = values
 
     def _derive(self, slot: int) -> None:
         """Work out a slot's derived columns (``_DERIVED``) from its segment's columns."""

@@ -16,7 +16,11 @@ from typing import TYPE_CHECKING, Generic, TypeVar
 import numpy as np
 
 from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.geometry.quaternions import compose_poses_batch
+from fleet_async.core.geometry.quaternions import (
+    compose_poses_batch,
+    quat_multiply_batch,
+    rotate_vectors_batch,
+)
 from fleet_async.core.world.state import KinematicState
 
 if TYPE_CHECKING:
@@ -64,10 +68,15 @@ class AttachmentSet(Generic[_B]):
         self._plan: (
             list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[Attachment[_B]]]] | None
         ) = None
-        # Per plan level: the parent and child poses the last pass saw (None: not yet).
-        self._seen: list[tuple[np.ndarray, np.ndarray] | None] = []
+        # Per plan level: whether a pass has placed every child of it since the plan was built.
+        self._seen: list[bool] = []
+        # One child placed on its own (attach, set_pose of a carrier): the parent-frame offset
+        # and orientation by (parent orientation, relative pose), as compose_poses_batch gives
+        # them for one row. A fleet's carried objects mostly share both, and the batch
+        # functions cost far more than the arithmetic on one row.
+        self._one: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self.incremental = True
-        """Recompute only the children whose parent or own pose changed since the last pass
+        """Recompute only the children whose parent or own row was written since the last pass
         (False: every child every step, the reference the incremental pass is tested
         against; both give the same bits)."""
 
@@ -144,19 +153,23 @@ class AttachmentSet(Generic[_B]):
     def follow_all(self) -> None:
         """Make every child follow its parent, parents before children (once per step).
 
-        A child whose parent and own pose are as the last pass left them is where it
-        belongs already, so only the others are composed (one gather and compare per level
-        instead of the quaternion arithmetic for every carried object)."""
+        A child whose parent and own row were not written since the last pass (the store's
+        ``written`` flags, which every pose write sets) is where it belongs already, so only
+        the others are composed: a flag gather per level instead of the quaternion arithmetic
+        for every carried object. Composing a child again from unchanged poses gives the
+        bits it has, so a written but unchanged row costs time, never a different result."""
         if not self._by_child:
             return
         if self._plan is None:
             self._plan = self._build_plan()
-            self._seen = [None] * len(self._plan)
+            self._seen = [False] * len(self._plan)
         for level, (parent_rows, child_rows, rel_pos, rel_orn, link_atts) in enumerate(self._plan):
             if len(child_rows):
                 self._follow_level(level, parent_rows, child_rows, rel_pos, rel_orn)
             for att in link_atts:
                 self.place_child_only(att)
+        store = self._store
+        store.written[: store.high_water] = False
 
     def _follow_level(
         self,
@@ -167,45 +180,44 @@ class AttachmentSet(Generic[_B]):
         rel_orn: np.ndarray,
     ) -> None:
         store = self._store
-        # One (N, 14) row per attachment: parent position, orientation, child position, ...
-        now = np.concatenate(
-            (
-                store.position[parent_rows],
-                store.orientation[parent_rows],
-                store.position[child_rows],
-                store.orientation[child_rows],
-            ),
-            axis=1,
-        )
-        seen = self._seen[level]
-        if seen is None or not self.incremental:
-            pos, orn = compose_poses_batch(_packed(now, 0, 3), _packed(now, 3, 7), rel_pos, rel_orn)
-            self._write(child_rows, pos, orn)
-            now[:, 7:10], now[:, 10:14] = pos, orn
-            self._seen[level] = (now, child_rows)
-            return
-        last, _ = seen
-        stale = np.flatnonzero((now != last).any(axis=1))
-        if not len(stale):
-            return
-        fresh = now[stale]
+        if not (self._seen[level] and self.incremental):
+            self._seen[level] = True  # every child, this once
+        else:
+            written = store.written
+            stale = np.flatnonzero(written[parent_rows] | written[child_rows])
+            if not len(stale):
+                return
+            parent_rows, child_rows = parent_rows[stale], child_rows[stale]
+            rel_pos, rel_orn = rel_pos[stale], rel_orn[stale]
+        # Gathered rows are C-contiguous copies: a subset composes to the full pass's bits.
         pos, orn = compose_poses_batch(
-            _packed(fresh, 0, 3), _packed(fresh, 3, 7), rel_pos[stale], rel_orn[stale]
+            store.position[parent_rows], store.orientation[parent_rows], rel_pos, rel_orn
         )
-        self._write(child_rows[stale], pos, orn)
-        last[stale, 0:7] = now[stale, 0:7]
-        last[stale, 7:10], last[stale, 10:14] = pos, orn
+        self._write(child_rows, pos, orn)
 
     def place_child_only(self, att: Attachment[_B]) -> None:
         """Place one child from its parent link without recursing (the plan orders depths)."""
         parent_pos, parent_orn = self._parent_frame(att)
-        pos, orn = compose_poses_batch(
-            parent_pos[None, :],
-            parent_orn[None, :],
-            att.relative.position[None, :],
-            att.relative.orientation[None, :],
-        )
-        self._write(np.array([att.child.state_row]), pos, orn)
+        rel = att.relative
+        key = parent_orn.tobytes() + rel.position.tobytes() + rel.orientation.tobytes()
+        known = self._one.get(key)
+        if known is None:
+            if len(self._one) >= 1024:
+                self._one.clear()
+            # compose_poses_batch's own two products, for one row
+            parent_quat = parent_orn[None, :]
+            known = self._one[key] = (
+                rotate_vectors_batch(rel.position[None, :], parent_quat),
+                quat_multiply_batch(parent_quat, rel.orientation[None, :]),
+            )
+        offset, orn = known
+        pos = (parent_pos[None, :] + offset)[0].tolist()
+        store, row = self._store, att.child.state_row
+        quat = orn[0].tolist()
+        if store.position[row].tolist() != pos or store.orientation[row].tolist() != quat:
+            store.position[row] = pos
+            store.orientation[row] = quat
+            store.mark_moved(row)
 
     def _parent_frame(self, att: Attachment[_B]) -> tuple[np.ndarray, np.ndarray]:
         if att.link_index == -1:
@@ -254,9 +266,3 @@ class AttachmentSet(Generic[_B]):
                 )
             )
         return plan
-
-
-def _packed(rows: np.ndarray, start: int, stop: int) -> np.ndarray:
-    """Columns ``start:stop`` as a C-contiguous array: the composition then runs on the same
-    memory layout whether it covers every attachment or a few, so it gives the same bits."""
-    return np.ascontiguousarray(rows[:, start:stop])

@@ -206,6 +206,7 @@ class PyBulletBackend:
             lin, ang = p.getBaseVelocity(body, physicsClientId=cid)
             if pos != tuple(store.position[row]) or orn != tuple(store.orientation[row]):
                 store.moved[row] = True
+                store.written[row] = True
             store.position[row] = pos
             store.orientation[row] = orn
             store.velocity[row] = lin

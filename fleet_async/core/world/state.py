@@ -36,6 +36,9 @@ class KinematicState:
         active (N,) bool, row in use.
         dirty (N,) bool, PyBullet's view of the body is stale.
         moved (N,) bool, pose changed since the last collision check.
+        written (N,) bool, pose written since the attachment pass last looked (set by every
+            pose write: ``mark_moved``, allocation, PyBullet's read-back; cleared only by that
+            pass, whose carried objects follow the rows it flags).
     """
 
     _FLOAT_COLUMNS = ("position", "orientation", "velocity", "angular_velocity")
@@ -56,6 +59,7 @@ class KinematicState:
         self.active = np.zeros(capacity, dtype=bool)
         self.dirty = np.zeros(capacity, dtype=bool)
         self.moved = np.zeros(capacity, dtype=bool)
+        self.written = np.zeros(capacity, dtype=bool)
         self._free: list[int] = []
         self._high_water = 0
         self.layout_version = 0
@@ -113,6 +117,7 @@ class KinematicState:
         self.object_id[row] = object_id
         self.active[row] = True
         self.moved[row] = True
+        self.written[row] = True
         self.layout_version += 1
         return row
 
@@ -146,6 +151,7 @@ class KinematicState:
         self.active[rows] = True
         self.dirty[rows] = False  # freshly created bodies already sit at this pose in PyBullet
         self.moved[rows] = True  # but the collision system has not seen them yet
+        self.written[rows] = True
         self.layout_version += 1
         return rows
 
@@ -172,6 +178,7 @@ class KinematicState:
         self.active[:] = False
         self.dirty[:] = False
         self.moved[:] = False
+        self.written[:] = False
         self.body_id[:] = -1
         self.object_id[:] = -1
         self._free.clear()
@@ -188,6 +195,7 @@ class KinematicState:
         """Flag rows whose pose changed: stale in PyBullet, unseen by the collision system."""
         self.dirty[rows] = True
         self.moved[rows] = True
+        self.written[rows] = True
 
     def live_rows(self) -> np.ndarray:
         """Indices of rows in use, ascending."""
@@ -204,7 +212,7 @@ class KinematicState:
                 getattr(self, name).nbytes
                 for name in (*self._FLOAT_COLUMNS, "body_id", "object_id", "collision_mode")
             )
-            + 4 * self.capacity
+            + 5 * self.capacity  # the bool columns: kinematic, active, dirty, moved, written
         )
 
     def _reserve(self, needed: int) -> None:
@@ -220,7 +228,7 @@ class KinematicState:
             grown[old.shape[0] :] = fill
             setattr(self, name, grown)
         self.orientation[old_cap:, 3] = 1.0
-        for name in ("kinematic", "active", "dirty", "moved"):
+        for name in ("kinematic", "active", "dirty", "moved", "written"):
             old = getattr(self, name)
             grown = np.full(new_cap, name == "kinematic", dtype=bool)  # fresh rows: kinematic
             grown[: old.shape[0]] = old
