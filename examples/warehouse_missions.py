@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -108,7 +109,7 @@ def lanes(homes: list[float], totes: list[float]) -> RouteGraph:
             if node_id not in graph.nodes:
                 graph.add_node(RouteNode(node_id, x, y))
             ids.append(node_id)
-        for a, b in zip(ids, ids[1:], strict=False):
+        for a, b in itertools.pairwise(ids):
             graph.add_edge(f"{a}>{b}", a, b)
 
     crossings = (PICK_LANE, 6.0, 10.0, STATION_LANE)  # the patrol's lanes are y = 6 and 10
