@@ -49,7 +49,7 @@ from fleet_async.core.routes import RouteGraph, RouteNode
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "warehouse.yaml"
 NORTHBOUND = (6.5, 12.5, 19.0)  # x of the northbound lanes in the cross aisles
-SOUTHBOUND = (1.0, 13.5)  # x of the southbound lanes (the cross aisle at x = 13 has both)
+SOUTHBOUND = (1.0, 7.5, 13.5)  # x of the southbound lanes (the cross aisles at x = 7, 13 have both)
 PICK_LANE = 1.5  # y of the eastbound lane in the aisle in front of shelf row A
 PICK_SIDING = 2.3  # y where a picker stands, off the lane, before it picks a tote
 STATION_LANE = 14.6  # y of the westbound lane in front of the station tables
