@@ -20,7 +20,8 @@ boxes; the candidate pairs are then tested exactly (a rectangle against a box). 
 
 What is not an obstacle: the robot itself, what it carries (its attachments), anything
 entirely below 2 cm (``safety_state.py``) above the robot's base or above its top (the floor, a
-shelf it drives under). Velocity commands and custom controllers are not stopped.
+shelf it drives under). Velocity commands are held and slowed as paths are (the engine scales
+them); a custom base controller, which moves its robot itself, is not watched.
 Stopped robots that hold each other are watched for deadlocks (``safety_deadlock.py``).
 """
 
