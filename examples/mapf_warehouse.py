@@ -39,7 +39,7 @@ from fleet_async import (
 )
 from fleet_async.core.maps.readers import read_movingai_scen
 
-BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])  # 0.6 x 0.4 m robots on 1 m cells
+BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])  # 0.6 x 0.4 m robots on 1 m cells, 1 m/s
 FIELDS = {"deceleration": 1.0, "protective_margin": 0.1, "warning_margin": 0.3}
 
 
@@ -166,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
                     visual_shape=BOX,
                     collision_shape=BOX,
                     initial_pose=at(x, y),
-                    motion_mode="omnidirectional",
+                    controller={"type": "omni", "max_linear_vel": 1.0, "max_linear_accel": 1.0},
                     safety_field=FIELDS,
                     name=f"robot_{k}",
                 )

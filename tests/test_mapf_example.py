@@ -41,13 +41,13 @@ def test_a_small_run_on_the_scenario_file_prints_its_summary(capsys):
             "--scen", str(DATA / "warehouse-small.scen"),
             "--cell", "1.0",
             "--robots", "3",
-            "--duration", "40",
+            "--duration", "60",
         ]
     )  # fmt: skip
     out = capsys.readouterr().out
     assert code == 0
     assert "map: warehouse-small.map, 33 x 17 cells" in out
     assert "robots: 3 (0 tasks left out" in out
-    assert "sim time: 40.0 s in 400 steps" in out
+    assert "sim time: 60.0 s in 600 steps" in out
     assert "arrived: 3 of 3 robots at their goals" in out
     assert "collisions: 0 (contacts that began)" in out
