@@ -1,26 +1,37 @@
 """Warehouse missions: robots fetch totes from shelves to packing stations, written as async code.
 
 Run:  python examples/warehouse_missions.py [--robots 6] [--orders 12] [--backend asyncio|trio]
-                                            [--max-steps N] [--gui]
+                                            [--no-fields] [--max-steps N] [--gui]
  or:  fleet-async run examples/scenarios/warehouse.yaml   (the same shift, then a run summary)
 
 The warehouse is the scenario file examples/scenarios/warehouse.yaml: shelf racks and packing
 stations from a Gazebo world, a picker fleet from a grid entry, a patrol squad and a restocking
-run of its own. The scenario names this file's ``shift`` as its mission (its ``missions:``
-section), so ``fleet-async run`` runs the same shift as this script. ``shift`` is a dispatcher:
-it starts one mission per picker. Each picker takes the next order from the shared order list,
-picks the tote at the shelf, drives to its station through a cross aisle, drops the tote there
-and comes back for more; a supervisor mission reports progress every 20 s of sim time. Each
-order is a task: its delivery (or giving up on it) is a TASK_COMPLETED (TASK_FAILED) event,
-which the fleet KPIs count (the run summary's 'tasks completed', a sweep's throughput).
-Everything happens in sim time: the step loop advances only when every mission is waiting, so
-the run is deterministic and much faster than real time.
+run of its own. Every robot has safety fields (the entities' ``safety_field`` key): something in
+a robot's protective field stops it, something in its warning field slows it, as a real AGV's
+scanner does. The scenario names this file's ``shift`` as its mission (its ``missions:``
+section), so ``fleet-async run`` runs the same shift as this script.
+
+``shift`` is a dispatcher. The pickers drive on one-way lanes (``lanes()``, a route graph the
+viewer draws): east along the pick aisle in front of the totes, north through the cross aisles,
+west along the station lane, south at the west wall. Each picker takes the order whose tote is
+nearest ahead of it on the lanes, picks the tote from the aisle's edge, drives to a free slot
+at its station, drops the tote there and comes back for more; a supervisor mission reports
+progress every 20 s of sim time. The fields make robots wait for each other where lanes cross;
+when robots hold each other for ``traffic.deadlock_after`` seconds (a ``deadlock_suspected``
+event), the dispatcher's strategy is the simplest there is: the picker with the highest number
+among them backs off a metre, waits a second and drives on. Each order is a task: its delivery
+(or giving up on it) is a TASK_COMPLETED (TASK_FAILED) event, which the fleet KPIs count (the
+run summary's 'tasks completed', a sweep's throughput). Everything happens in sim time: the
+step loop advances only when every mission is waiting, so the run is deterministic and much
+faster than real time. ``--no-fields`` runs the same shift without fields, for comparison.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib.util
+import itertools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,12 +45,21 @@ from fleet_async import (
     SimObject,
     load_yaml_config,
 )
+from fleet_async.core.routes import RouteGraph, RouteNode
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "warehouse.yaml"
-CROSS_AISLES = (1.0, 7.0, 13.0, 19.0)  # x of the free lanes between shelf racks
-PICK_LANE = 2.0  # y of the aisle in front of shelf row A
-STATION_LANE = 15.0  # y of the lane in front of the station tables
+NORTHBOUND = (6.5, 12.5, 19.0)  # x of the northbound lanes in the cross aisles
+SOUTHBOUND = (1.0, 7.5, 13.5)  # x of the southbound lanes (the cross aisles at x = 7, 13 have both)
+PICK_LANE = 1.5  # y of the eastbound lane in the aisle in front of shelf row A
+PICK_SIDING = 2.3  # y where a picker stands, off the lane, before it picks a tote
+STATION_LANE = 14.6  # y of the westbound lane in front of the station tables
+DROP_SIDING = 15.3  # y where a picker stands, off the lane, before it drops a tote
 STATIONS = (5.0, 15.0)  # x of the station tables (at y = 17)
+SLOTS = 6  # drop slots per station, side by side in front of its table
+SLOT_SPACING = 0.6  # m between slots: a robot's field passes between the totes beside it
+DROP_Y = 16.3  # y where totes are set down (the tables' front is at 16.6)
+PICK_OFFSET = 0.7  # m from a tote where a picker stops: its protective field just misses it
+BACK_OFF = 1.0  # m a picker reverses to break a suspected deadlock
 
 
 @dataclass
@@ -65,6 +85,71 @@ def build(gui: bool) -> MultiRobotSimulationCore:
     )
 
 
+def slot_x(station: int, slot: int) -> float:
+    """x of drop slot ``slot`` of station ``station``."""
+    return STATIONS[station] + SLOT_SPACING * (slot - (SLOTS - 1) / 2)
+
+
+def lanes(homes: list[float], totes: list[float]) -> RouteGraph:
+    """The pickers' one-way lanes: a loop through the aisles, with a stop in front of each
+    tote (``pick@x``), each drop slot (``slot@x``) and each picker's dock (``dock@x``).
+
+    Args:
+        homes: x of the pickers' docks (south of the pick aisle; a dock is joined to the pick
+            lane both ways: left at the start of the shift, reached at its end).
+        totes: x of the totes (in front of shelf row A).
+    """
+    graph = RouteGraph(default_speed=1.5)
+
+    def chain(name: str, points: list[tuple[float, float]]) -> None:
+        """Nodes at ``points`` (already there: reused), joined in this order."""
+        ids = []
+        for x, y in points:
+            node_id = f"{name}@{x:g},{y:g}"
+            if node_id not in graph.nodes:
+                graph.add_node(RouteNode(node_id, x, y))
+            ids.append(node_id)
+        for a, b in itertools.pairwise(ids):
+            graph.add_edge(f"{a}>{b}", a, b)
+
+    crossings = (PICK_LANE, 6.0, 10.0, STATION_LANE)  # the patrol's lanes are y = 6 and 10
+    stops = sorted({*NORTHBOUND, *SOUTHBOUND, *homes, *totes})
+    slots = [slot_x(s, k) for s in range(len(STATIONS)) for k in range(SLOTS)]
+    chain("lane", [(x, PICK_LANE) for x in stops])
+    chain("lane", [(x, STATION_LANE) for x in sorted({*NORTHBOUND, *SOUTHBOUND, *slots})[::-1]])
+    for x in NORTHBOUND:
+        chain("lane", [(x, y) for y in crossings])
+    for x in SOUTHBOUND:
+        chain("lane", [(x, y) for y in crossings[::-1]])
+    for x in homes:
+        chain("lane", [(x, -1.5), (x, PICK_LANE), (x, -1.5)])
+    return graph
+
+
+def node_at(graph: RouteGraph, x: float, y: float) -> str:
+    """The id of the lane node at (x, y)."""
+    return graph.nearest_node(x, y).node_id
+
+
+def corners(graph: RouteGraph, start: str, goal: str) -> list[Pose]:
+    """The route from ``start`` to ``goal`` as the poses where it turns (and its end): a
+    picker drives each straight run in one go instead of stopping at every node."""
+    points = [graph.node(start)] + [graph.node(e.end) for e in graph.shortest_path(start, goal)]
+    out: list[Pose] = []
+    for before, here, after in zip(points, points[1:], [*points[2:], None], strict=False):
+        if after is not None:
+            cross = (here.x - before.x) * (after.y - here.y) - (here.y - before.y) * (
+                after.x - here.x
+            )
+            ahead = (here.x - before.x) * (after.x - here.x) + (here.y - before.y) * (
+                after.y - here.y
+            )
+            if abs(cross) < 1e-9 and ahead > 0:  # straight on: no stop here
+                continue
+        out.append(Pose.from_xyz(here.x, here.y, 0.1))
+    return out
+
+
 def prepare(
     sim: MultiRobotSimulationCore, robots: int, orders: int
 ) -> tuple[list[Agent], list[Order]]:
@@ -82,50 +167,88 @@ def prepare(
     ]
 
 
-def station_pose(station: int, slot: int) -> Pose:
-    """Where a tote goes at a station: side by side on the floor in front of the table."""
-    return Pose.from_xyz(STATIONS[station] - 0.6 + 0.4 * (slot % 4), 16.2 - 0.4 * (slot // 4), 0.08)
-
-
-def via_cross_aisle(robot: Agent, y_to: float, x_to: float | None = None) -> list[Pose]:
-    """A path to lane ``y_to`` through the nearest cross aisle (never through a rack)."""
-    here = robot.get_pose()
-    xc = min(CROSS_AISLES, key=lambda x: abs(x - here.x))
-    path = [Pose.from_xyz(xc, here.y, 0.1), Pose.from_xyz(xc, y_to, 0.1)]
-    if x_to is not None:
-        path.append(Pose.from_xyz(x_to, y_to, 0.1))
-    return path
-
-
 async def run_shift(
     sim: MultiRobotSimulationCore, fleet: list[Agent], orders: list[Order]
 ) -> dict[str, int]:
     """The dispatcher: one mission per robot, plus a supervisor; returns the tally."""
+    homes = [robot.get_pose().x for robot in fleet]
+    graph = lanes(homes, [order.tote.get_pose().x for order in orders])
+    sim.set_route_graph(graph)  # traced: the viewer draws the lanes
     backlog = list(orders)
     filled = [0] * len(STATIONS)
-    tally = {"delivered": 0, "failed": 0}
+    tally = {"delivered": 0, "failed": 0, "backed_off": 0}
+    nudges = {robot.object_id: sim.event() for robot in fleet}
 
     def say(message: str) -> None:
         print(f"[t={sim.sim_time:6.1f} s] {message}")
 
-    async def robot_mission(robot: Agent) -> None:
-        home = robot.get_pose()
+    def on_deadlock(agents: list[Agent], **_: object) -> None:
+        # The strategy: of the pickers that hold each other, the highest-numbered backs off.
+        ours = [a for a in agents if a.object_id in nudges]
+        names = ", ".join(a.name or "?" for a in agents)
+        if not ours:
+            say(f"deadlock suspected: {names} (none of them is a picker)")
+            return
+        yielder = max(ours, key=lambda a: a.object_id)
+        say(f"deadlock suspected: {names}; {yielder.name} backs off")
+        nudges[yielder.object_id].set()
+
+    async def leg(robot: Agent, goal: Pose) -> None:
+        """Drive straight to ``goal``; back off and try again when told to (a deadlock)."""
+        while True:
+            nudge = nudges[robot.object_id] = sim.event()
+            won, _ = await sim.race(robot.move([goal]), nudge)
+            if won == 0:
+                return
+            tally["backed_off"] += 1
+            here = robot.get_pose()
+            yaw = here.yaw
+            back = Pose.from_xyz(
+                here.x - BACK_OFF * math.cos(yaw), here.y - BACK_OFF * math.sin(yaw), 0.1
+            )
+            with sim.move_on_after(5.0):  # something behind it too: give up backing off
+                await robot.move([back], direction="backward")
+            await sim.sleep(1.0)
+
+    async def drive(robot: Agent, goal: str) -> None:
+        here = robot.get_pose()
+        start = graph.nearest_node(here.x, here.y)
+        if math.hypot(start.x - here.x, start.y - here.y) > 0.05:  # at a siding: to the lane
+            await leg(robot, Pose.from_xyz(start.x, start.y, 0.1))
+        for pose in corners(graph, start.node_id, goal):
+            await leg(robot, pose)
+
+    def route_time(robot: Agent, order: Order) -> tuple[float, int]:
+        here, tote = robot.get_pose(), order.tote.get_pose()
+        path = graph.shortest_path(
+            node_at(graph, here.x, here.y), node_at(graph, tote.x, PICK_LANE)
+        )
+        return (sum(graph.cost(edge) for edge in path), order.number)
+
+    async def robot_mission(robot: Agent, home: float) -> None:
         while backlog:
-            order = backlog.pop(0)  # missions run one at a time between steps: no lock needed
+            # Missions run one at a time between steps: no lock needed.
+            order = min(backlog, key=lambda o: route_time(robot, o))
+            backlog.remove(order)
             try:
-                if robot.get_pose().y > PICK_LANE + 1.0:  # at the stations: back to the racks
-                    await robot.move(via_cross_aisle(robot, PICK_LANE))
+                tote = order.tote.get_pose()
+                await drive(robot, node_at(graph, tote.x, PICK_LANE))
                 await robot.pick(
                     order.tote,
-                    approach_offset=1.0,
-                    pick_offset=0.4,
-                    attach_relative_pose=Pose.from_xyz(0, 0, 0.2),
+                    approach_offset=tote.y - PICK_SIDING,
+                    pick_offset=PICK_OFFSET,
+                    attach_relative_pose=Pose.from_xyz(0, 0, 0.25),
                 )
                 say(f"{robot.name} picked {order.tote.name} ({order})")
-                await robot.move(via_cross_aisle(robot, STATION_LANE, STATIONS[order.station]))
                 slot = filled[order.station]
                 filled[order.station] += 1
-                await robot.drop(station_pose(order.station, slot), approach_offset=0.8)
+                x = slot_x(order.station, slot % SLOTS)
+                await drive(robot, node_at(graph, x, STATION_LANE))
+                await robot.drop(
+                    Pose.from_xyz(x, DROP_Y, 0.08),
+                    approach_offset=DROP_Y - DROP_SIDING,
+                    drop_offset=PICK_OFFSET,
+                )
                 tally["delivered"] += 1
                 # An order is a task: the fleet KPIs (sim.kpis(), fleet-async run / sweep)
                 # count these events as tasks completed / failed.
@@ -135,7 +258,7 @@ async def run_shift(
                 tally["failed"] += 1
                 sim.events.emit(SimEvents.TASK_FAILED, sim=sim, agent=robot, task=order)
                 say(f"{robot.name} gave up on {order}: {exc.action.error_message}")
-        await robot.move([*via_cross_aisle(robot, PICK_LANE), home])
+        await drive(robot, node_at(graph, home, -1.5))
         say(f"{robot.name} is back at the dock")
 
     async def supervisor() -> None:
@@ -146,11 +269,26 @@ async def run_shift(
                 f"{len(backlog)} not yet picked up"
             )
 
-    async with sim.task_group() as tg:
-        tg.start_soon(supervisor, name="supervisor")
-        for robot in fleet:
-            tg.start_soon(robot_mission, robot, name=robot.name)
+    sim.events.on(SimEvents.DEADLOCK_SUSPECTED, on_deadlock)
+    try:
+        async with sim.task_group() as tg:
+            tg.start_soon(supervisor, name="supervisor")
+            for robot, home in zip(fleet, homes, strict=True):
+                tg.start_soon(robot_mission, robot, home, name=robot.name)
+    finally:
+        sim.events.off(SimEvents.DEADLOCK_SUSPECTED, on_deadlock)
     return tally
+
+
+def waiting(sim: MultiRobotSimulationCore) -> str:
+    """What the safety fields cost: stops, time stopped, deadlocks suspected."""
+    stats = sim.safety.stats()
+    stops = sum(s for s, _ in stats.values())
+    stood = math.fsum(t for _, t in stats.values())
+    return (
+        f"{stops} safety stops, {stood:.1f} s stopped (summed over {len(stats)} robots with "
+        f"fields), {sim.safety.deadlocks_suspected} deadlocks suspected"
+    )
 
 
 async def shift(sim: MultiRobotSimulationCore, robots: int = 6, orders: int = 12) -> dict[str, int]:
@@ -160,7 +298,8 @@ async def shift(sim: MultiRobotSimulationCore, robots: int = 6, orders: int = 12
     print(
         f"shift over: {tally['delivered']}/{len(order_list)} orders delivered, "
         f"{tally['failed']} failed, {sim.sim_time:.1f} s of sim time, "
-        f"{sim.collision_count} contacts began (collisions)"
+        f"{sim.collision_count} contacts began (collisions); {waiting(sim)}, "
+        f"{tally['backed_off']} back-offs"
     )
     return tally
 
@@ -172,6 +311,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--backend", choices=["asyncio", "trio"], default="asyncio")
     parser.add_argument("--max-steps", type=int, default=6000, help="stop after this many steps")
     parser.add_argument(
+        "--no-fields", action="store_true", help="take the robots' safety fields away"
+    )
+    parser.add_argument(
         "--gui", action="store_true", help="open the PyBullet window (needs a display)"
     )
     args = parser.parse_args(argv)
@@ -179,6 +321,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error('--backend trio needs trio: pip install "fleet-async[trio]"')
 
     with build(args.gui) as sim:
+        if args.no_fields:
+            for agent in sim.agents:
+                sim.safety.disable(agent)
         tally = fa.run(
             sim,
             shift,

@@ -12,7 +12,8 @@ How long a run lasts:
   (the fewest whole steps covering it); missions still alive then are cancelled.
 - without one: until the scenario's work is done, that is every mission of its ``missions:``
   section has returned and every agent has finished its queued actions (``actions:`` lists)
-  and stopped; at most ``max_duration`` (600 s of sim time by default). A scenario with
+  and stopped (robots on a patrol or random-walk controller, whose work has no end, are not
+  waited for); at most ``max_duration`` (600 s of sim time by default). A scenario with
   neither missions nor actions (robots on patrol controllers, say) has no end of its own and
   runs to ``max_duration``.
 
@@ -73,8 +74,12 @@ class ScenarioOutcome:
 
 
 def work_done(sim: MultiRobotSimulationCore) -> bool:
-    """Whether every agent has an empty action queue and stands still."""
-    return all(a.is_action_queue_empty() and not a.is_moving for a in _agents(sim))
+    """Whether every agent has an empty action queue and stands still, robots on a
+    high-level controller (patrol, random walk: work without an end) aside."""
+    return all(
+        a.is_action_queue_empty() and (not a.is_moving or len(a.controllers) > 1)
+        for a in _agents(sim)
+    )
 
 
 def _has_actions(sim: MultiRobotSimulationCore) -> bool:

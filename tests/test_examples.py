@@ -10,6 +10,8 @@ from pathlib import Path
 import pytest
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.py"))
+# Examples whose defaults are big (a thousand robots) run small here, to keep the suite fast.
+SMALL = {"mapf_warehouse.py": ["--robots", "40", "--duration", "30"]}
 
 
 def test_there_are_examples():
@@ -19,7 +21,7 @@ def test_there_are_examples():
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.name)
 def test_example_runs_headless(example):
     result = subprocess.run(
-        [sys.executable, str(example), "--max-steps", "2000"],
+        [sys.executable, str(example), "--max-steps", "2000", *SMALL.get(example.name, [])],
         capture_output=True,
         text=True,
         timeout=300,

@@ -37,6 +37,8 @@ class RunSummary:
         kpis: The run's fleet KPIs (``sim.kpis().summary()``), shown after the collisions.
         devices: Agents in the simulation at the end that are devices (doors, lifts,
             workcells): not robots, so not in the fleet KPIs.
+        safety_fields: Whether robots had safety fields (the summary then shows their stops,
+            the time stopped and the deadlocks suspected).
     """
 
     robots: int
@@ -54,6 +56,7 @@ class RunSummary:
     kpis: FleetKpis | None = None
     devices: int = 0
     trace: str | None = None
+    safety_fields: bool = False
 
     @property
     def real_time_factor(self) -> float:
@@ -92,6 +95,7 @@ def format_summary(summary: RunSummary) -> str:
             f"{summary.collisions} (contacts that began: each time two objects started to touch)",
         ),
         *(_kpi_rows(kpis) if kpis is not None else []),
+        *(_safety_rows(kpis) if kpis is not None and summary.safety_fields else []),
     ]
     if summary.stopped:
         rows.append(("stopped", summary.stopped))
@@ -144,6 +148,25 @@ def _kpi_rows(kpis: FleetKpis) -> list[tuple[str, str]]:
     ]
 
 
+def _safety_rows(kpis: FleetKpis) -> list[tuple[str, str]]:
+    """What the robots' safety fields cost: stops, time stopped, deadlocks suspected."""
+    n = kpis.robot_count
+    mean = kpis.safety_stopped_time_total_s / n if n else 0.0
+    return [
+        (
+            "safety stops",
+            f"{kpis.safety_stops} (a protective field stopped a robot; "
+            f"{kpis.safety_stopped_time_total_s:.1f} s stopped, summed over {n} "
+            f"robot{'' if n == 1 else 's'}; {mean:.1f} s per robot)",
+        ),
+        (
+            "deadlocks",
+            f"{kpis.deadlocks_suspected} suspected (robots held by each other's fields: "
+            "deadlock_suspected events)",
+        ),
+    ]
+
+
 def summarize(
     sim: MultiRobotSimulationCore,
     row: FleetKpis,
@@ -172,4 +195,5 @@ def summarize(
         interrupted=outcome is None,
         kpis=row,
         devices=devices,
+        safety_fields=sim.safety.enabled or row.safety_stops > 0,
     )

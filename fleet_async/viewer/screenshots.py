@@ -26,7 +26,7 @@ __all__ = ["MOMENTS", "Screenshots", "main", "record_warehouse", "take_screensho
 
 WAREHOUSE = Path(__file__).resolve().parents[1].parent / "examples" / "scenarios" / "warehouse.yaml"
 ROBOT = "picker_0"
-MOMENTS = (("picking", 5.0), ("carrying", 20.0), ("dropping", 31.0))
+MOMENTS = (("picking", 9.0), ("carrying", 25.0), ("dropping", 40.0))
 """(name, sim time in s) of each screenshot: picker_0's first order, from tote to station."""
 _READY = "['ready', 'error'].includes(document.getElementById('app').dataset.state)"
 

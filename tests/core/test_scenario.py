@@ -677,7 +677,7 @@ def test_example_scenario_runs_headless(build, path):
         for _ in range(800):
             sim.step_once()
         assert failed == [] and not pallet.is_attached()
-        assert pallet.get_pose().position.tolist() == pytest.approx([1.0, 17.5, 0.05])
+        assert pallet.get_pose().position.tolist() == pytest.approx([-0.5, 18.5, 0.05])
     if path.name == "pick_drop.yaml":
         drops = sorted(
             action["drop_pose"]

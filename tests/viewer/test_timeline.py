@@ -177,14 +177,15 @@ def test_warehouse_screenshots_and_the_first_pick_names_its_order_and_object(
     assert reader.bodies[shots.robot_id]["name"] == "picker_0"
     picks = [r for r in shots.timeline if r["text"].startswith("PickAction")]
     first = picks[0]["text"]
-    # What the shift's log says: "picker_0 picked tote_A1_0 (order 0: tote_A1_0 to station_1)".
-    assert first.startswith("PickAction tote_A1_0 at (2.5, 3.2)"), first
-    assert first.endswith("order 0: tote_A1_0 to station_1"), first
-    assert any(r["text"] == "carrying tote_A1_0" for r in shots.timeline)
-    assert any(r["text"] == "order 0: tote_A1_0 to station_1 done" for r in shots.timeline)
+    # What the shift's log says: "picker_0 picked tote_A1_2 (order 2: tote_A1_2 to station_1)"
+    # (the dispatcher gives each picker the order whose tote is nearest ahead on the lanes).
+    assert first.startswith("PickAction tote_A1_2 at (4.5, 3.2)"), first
+    assert first.endswith("order 2: tote_A1_2 to station_1"), first
+    assert any(r["text"] == "carrying tote_A1_2" for r in shots.timeline)
+    assert any(r["text"] == "order 2: tote_A1_2 to station_1 done" for r in shots.timeline)
     assert len(shots.files) == len(MOMENTS) == 3
     for path in shots.files:
         assert path.stat().st_size > 10_000
-    assert shots.doing[0].startswith("now moving: PickAction tote_A1_0")
-    assert shots.doing[1].startswith("now carrying: MoveAction at (5.0, 15.0)")
-    assert shots.doing[2].startswith("now carrying: DropAction tote_A1_0")
+    assert shots.doing[0].startswith("now moving: PickAction tote_A1_2")
+    assert shots.doing[1].startswith("now carrying: MoveAction at (6.5, 14.6)")
+    assert shots.doing[2].startswith("now carrying: DropAction tote_A1_2")

@@ -113,8 +113,10 @@ class FleetMotion:
         self.engine.set_time_scale(scale_of_row)
 
     def path_rows(self) -> Any:
-        """Store rows of the agents following a path on a built-in controller (an array)."""
-        return self.engine.path_rows()
+        """Store rows of the agents the safety fields watch (an array): those following a
+        path or a velocity command on a built-in controller (a custom base controller moves
+        its robot itself, so the fields cannot hold it; docs/traffic.md)."""
+        return self.engine.commanded_rows()
 
     def segment_directions(self) -> Any:
         """(store rows, unit xy directions) of the agents driving a path segment now."""

@@ -13,7 +13,10 @@ collision check" flag; attachments; the kinematic engine (paths in progress, seg
 progress, velocity commands); every action queue (queued and running actions with their
 progress, timers); each agent's controllers, agent plugins (battery) and joints; the
 simulation plugins; the schedules of callbacks and plugins; the collision system's active pairs
-and check schedule. Objects that actions, controllers or plugins refer to are saved by id.
+and check schedule; the safety fields (each robot's field parameters and footprint, whether it
+is stopped and since when, its stops and time stopped, the deadlock watch; a map's obstacle
+boxes come with the scenario's maps). Objects that actions, controllers or plugins refer to
+are saved by id.
 
 Not saved, and refused where it matters:
 

@@ -3,8 +3,8 @@
 The header is read and checked first (format, version, timestep, the same objects with the
 same ids and types, no step run yet), so nothing is changed in a simulation that cannot take
 the checkpoint. Then plugins and schedules, objects (attachments, names, collision modes, the
-store's rows), agents (engine, queues, controllers, plugins, joints), the collision system and
-the random generator get their saved state back through ``set_state()``.
+store's rows), agents (engine, queues, controllers, plugins, joints), the collision system, the
+safety fields and the random generator get their saved state back through ``set_state()``.
 """
 
 from __future__ import annotations
@@ -171,6 +171,8 @@ def _apply(sim: SimulationKernel, state: dict[str, Any], parts: CheckpointParts)
     sim.rng.bit_generator.state = state["rng"]
     if "streams" in state:  # format 1 had none
         sim.random_streams.set_state(state["streams"])
+    if "safety" in state:  # checkpoints before safety fields had none
+        sim.safety.set_state(state["safety"])
 
 
 def restore(

@@ -111,6 +111,7 @@ def collect(sim: SimulationKernel, parts: CheckpointParts) -> dict[str, Any]:
         "plugins": typed_states(sim.plugins),
         "collision": parts.collision.get_state(),
         "streams": sim.random_streams.get_state(),
+        "safety": sim.safety.get_state(),
     }
 
 

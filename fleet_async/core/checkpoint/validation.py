@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from fleet_async.core.checkpoint.format import ROW_COLUMNS, CheckpointError, type_name
+from fleet_async.core.collision.safety_params import SafetyFieldParams
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -87,6 +88,22 @@ def _agents(sim: SimulationKernel, state: dict[str, Any]) -> None:
             raise CheckpointError(f"restore_state: joints of {object_id}, not an agent")
 
 
+def _safety(sim: SimulationKernel, state: dict[str, Any]) -> None:
+    """The safety fields' agents are agents here, with valid field parameters."""
+    if "safety" not in state:
+        return
+    table = state["safety"]["table"]
+    for saved in table["agents"]:
+        if saved["id"] not in state["agents"]:
+            raise CheckpointError(f"restore_state: safety fields of {saved['id']}, not an agent")
+        try:
+            SafetyFieldParams.coerce(saved["params"], "safety_field")
+        except ValueError as exc:
+            raise CheckpointError(f"restore_state: {exc}") from exc
+        if len(saved["stop"]) != 6:
+            raise CheckpointError(f"restore_state: the safety state of {saved['id']} is damaged")
+
+
 def _check(sim: SimulationKernel, state: dict[str, Any], parts: CheckpointParts) -> None:
     missing = [key for key in REQUIRED if key not in state]
     if missing:
@@ -105,6 +122,7 @@ def _check(sim: SimulationKernel, state: dict[str, Any], parts: CheckpointParts)
                 f"restore_state: the checkpoint has {len(state[name])} {name}, this "
                 f"simulation {len(schedule)}"
             )
+    _safety(sim, state)
     np.random.PCG64().state = state["rng"]  # a bad state raises here, on a throwaway
     step_count, collision_count, paused = state["clock"]
     if not all(isinstance(v, int) for v in (step_count, collision_count, paused)):

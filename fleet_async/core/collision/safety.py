@@ -21,7 +21,8 @@ phase every step), which gives the same results. Per robot:
 
 What is not an obstacle: the robot itself, what it carries (its attachments), anything
 entirely below 2 cm (``safety_state.py``) above the robot's base or above its top (the floor, a
-shelf it drives under). Velocity commands and custom controllers are not stopped.
+shelf it drives under). Velocity commands are held and slowed as paths are (the engine scales
+them); a custom base controller, which moves its robot itself, is not watched.
 Stopped robots that hold each other are watched for deadlocks (``safety_deadlock.py``).
 """
 
@@ -221,6 +222,40 @@ class SafetyFields:
         """The corners (m, world frame) of ``agent``'s protective (or warning) field now, for
         drawing; [] when it has no field in force (standing, or without fields)."""
         return self._table.corners(agent.object_id, warning)
+
+    # ----- checkpoints --------------------------------------------------------------------
+
+    def get_state(self) -> dict[str, Any]:
+        """Plain data for a checkpoint: every agent's fields and stop state, the KPI counters,
+        the deadlock watch (static boxes come with the scenario's maps, so are not saved)."""
+        store = self._sim.world.store
+
+        def object_id(row: int) -> int:
+            return int(store.object_id[row])
+
+        return {"table": self._table.get_state(), "watch": self._watch.get_state(object_id)}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Take a :meth:`get_state` back (a checkpoint restored into a fresh simulation).
+
+        Raises:
+            ValueError: for an object id that is no agent of this simulation.
+        """
+        world = self._sim.world
+
+        def agent_of(object_id: int) -> Any:
+            obj = world.get(object_id)
+            return obj if obj is not None and hasattr(obj, "motion_slot") else None
+
+        def row(object_id: int) -> int:
+            obj = agent_of(object_id)
+            if obj is None:
+                raise ValueError(f"safety fields: object {object_id} is no agent here")
+            return int(obj.state_row)
+
+        self._table.set_state(state["table"], agent_of)
+        self._watch.set_state(state["watch"], row)
+        self._layout = -1
 
     # ----- the phase ----------------------------------------------------------------------
 

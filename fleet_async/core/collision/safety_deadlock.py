@@ -12,7 +12,8 @@ job.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from typing import Any
 
 __all__ = ["DeadlockWatch", "blocked_sets"]
 
@@ -89,6 +90,22 @@ class DeadlockWatch:
         self._since.clear()
         self._reported.clear()
         self.count = 0
+
+    def get_state(self, key: Callable[[int], int]) -> dict[str, Any]:
+        """Plain data for a checkpoint, members mapped through ``key`` (row -> object id)."""
+        return {
+            "after": self._after,
+            "count": self.count,
+            "since": [[sorted(map(key, s)), step] for s, step in self._since.items()],
+            "reported": [sorted(map(key, s)) for s in self._reported],
+        }
+
+    def set_state(self, state: dict[str, Any], key: Callable[[int], int]) -> None:
+        """Take a :meth:`get_state` back, members mapped through ``key`` (object id -> row)."""
+        self.deadlock_after = state["after"]
+        self.count = int(state["count"])
+        self._since = {frozenset(map(key, s)): int(step) for s, step in state["since"]}
+        self._reported = {frozenset(map(key, s)) for s in state["reported"]}
 
     def update(self, sets: Iterable[frozenset[int]], step: int, dt: float) -> list[frozenset[int]]:
         """Note the blocked sets of ``step``; return those reaching ``deadlock_after`` now."""

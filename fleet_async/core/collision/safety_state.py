@@ -358,6 +358,62 @@ class FieldTable:
     def agents_at(self, rows: list[int]) -> list[Any]:
         return [self._agents[self._row_index[r]] for r in rows]
 
+    # ----- checkpoints ---------------------------------------------------------------------
+
+    def get_state(self) -> dict[str, Any]:
+        """Plain data for a checkpoint: each agent's parameters, footprint and stop state (by
+        object id, in the order they joined), the removed agents' counts."""
+        self._save()
+        agents = []
+        for oid, e in self._entries.items():
+            i = None if self._stale else self._index.get(oid)
+            known = i is not None and bool(self._z_known[i])
+            params = {f: getattr(e.params, f) for f in SafetyFieldParams.__dataclass_fields__}
+            if e.params.footprint is not None:
+                params["footprint"] = list(e.params.footprint)
+            agents.append(
+                {
+                    "id": oid,
+                    "params": params,
+                    "stop": [e.held, e.speed, list(e.dir), e.since, e.stops, e.steps],
+                    "scale": 1.0 if i is None else float(self.last_scale[i]),
+                    "shape": [*self.half[i].tolist(), *self.z_off[i].tolist()] if known else None,
+                }
+            )
+        retired = [[oid, stops, steps] for oid, (stops, steps) in self._retired.items()]
+        return {"agents": agents, "retired": retired, "had_scale": self.had_scale}
+
+    def set_state(self, state: dict[str, Any], agent_of: Callable[[int], Any]) -> None:
+        """Take a :meth:`get_state` back (``agent_of`` maps an object id to its agent).
+
+        Raises:
+            ValueError: for an id that is no agent, or bad parameters.
+        """
+        entries = []
+        for saved in state["agents"]:
+            agent = agent_of(int(saved["id"]))
+            if agent is None:
+                raise ValueError(f"safety fields: object {saved['id']} is no agent here")
+            params = SafetyFieldParams.coerce(saved["params"], "safety_field")
+            if params is None:
+                raise ValueError(f"safety fields: object {saved['id']} has no parameters")
+            entry = _Entry(agent, params)
+            held, speed, direction, since, stops, steps = saved["stop"]
+            entry.held, entry.speed, entry.dir = bool(held), float(speed), tuple(direction)
+            entry.since, entry.stops, entry.steps = int(since), int(stops), int(steps)
+            entries.append((entry, saved))
+        self._entries = {e.agent.object_id: e for e, _ in entries}
+        self._retired = {int(oid): (int(a), int(b)) for oid, a, b in state["retired"]}
+        self._build([e for e, _ in entries])
+        self._stale = False
+        for i, (_, saved) in enumerate(entries):
+            self.last_scale[i] = float(saved["scale"])
+            if saved["shape"] is not None:
+                hx, hy, z0, z1 = (float(v) for v in saved["shape"])
+                self.half[i], self.z_off[i] = (hx, hy), (z0, z1)
+                self.resolved[i] = self._z_known[i] = True
+        self.had_scale = bool(state["had_scale"])
+
     def corners(self, object_id: int, warning: bool) -> list[tuple[float, float]]:
         i = self._index.get(object_id)
         if i is None or self._stale or self._shapes is None or not self._active[i]:

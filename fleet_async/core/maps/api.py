@@ -1,6 +1,7 @@
 """``sim.load_map(path)``: a map_server occupancy grid or a MovingAI map as static geometry.
 
-Mixed into ``MultiRobotSimulationCore``; the maps loaded are kept in ``sim.maps``.
+Mixed into ``MultiRobotSimulationCore``; the maps added (``load_map``, ``add_map`` or
+``add_grid_map``) are kept in ``sim.maps`` and logged to the trace.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from fleet_async.core.maps.grid import OccupancyGrid
 from fleet_async.core.maps.readers import read_map_server, read_movingai_map
 from fleet_async.core.maps.world import GridMap, add_grid_map
 
@@ -16,7 +18,7 @@ __all__ = ["MapsApi"]
 
 
 class MapsApi:
-    """``sim.load_map`` and ``sim.maps`` (mixed into the simulation)."""
+    """``sim.load_map``, ``sim.add_map`` and ``sim.maps`` (mixed into the simulation)."""
 
     _maps: list[GridMap] | None = None
 
@@ -58,12 +60,21 @@ class MapsApi:
             raise ValueError(
                 f"load_map: {source}: expected a map_server .yaml or a MovingAI .map file"
             )
-        loaded = add_grid_map(self, grid, height=height, tile=tile, name=source.stem)
+        return add_grid_map(self, grid, height=height, tile=tile, name=source.stem)
+
+    def add_map(
+        self, grid: OccupancyGrid, *, height: float = 1.0, tile: float = 10.0, name: str = "map"
+    ) -> GridMap:
+        """Add an occupancy grid made in code as static obstacles (``add_grid_map``)."""
+        return add_grid_map(self, grid, height=height, tile=tile, name=name)
+
+    def note_map(self, loaded: GridMap) -> None:
+        """Keep ``loaded`` in ``sim.maps`` and log it to a running trace (``map_loaded``):
+        ``add_grid_map`` calls it for every map it adds, however it was asked to."""
         self._maps = [*(self._maps or []), loaded]
         trace_event = getattr(self, "trace_event", None)
         if trace_event is not None:  # a running trace draws it (docs/trace-format.md)
             trace_event("map_loaded", None, **loaded.trace_data())
-        return loaded
 
     def trace_scenery(self) -> list[tuple[str, dict[str, Any]]]:
         """The ``map_loaded`` and ``route_graph`` events a trace starts with (the maps loaded

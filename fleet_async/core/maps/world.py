@@ -82,7 +82,8 @@ def add_grid_map(
     tile: float = 10.0,
     name: str = "map",
 ) -> GridMap:
-    """Add ``grid``'s occupied cells to ``sim`` as static bodies (see the module doc).
+    """Add ``grid``'s occupied cells to ``sim`` as static bodies (see the module doc); the
+    simulation keeps the map in ``sim.maps`` and logs it to a running trace (``map_loaded``).
 
     Args:
         sim: The simulation.
@@ -132,4 +133,7 @@ def add_grid_map(
         result.bodies.append(obj)
     if len(lo):
         sim.safety.add_static_boxes(lo, hi, replaces=result.bodies)
+    note = getattr(sim, "note_map", None)
+    if note is not None:  # the simulation keeps it and traces it (maps/api.py)
+        note(result)
     return result

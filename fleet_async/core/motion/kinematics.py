@@ -493,6 +493,9 @@ class KinematicEngine(SlotTable):
 
     def _advance_velocity(self, s: np.ndarray, dt: float) -> None:
         limits = (self.vmax[s], self.amax[s], self.wmax[s], self.alpha[s])
-        self.vel[s] = advance_velocity(
-            self._store, self.row[s], self.vel[s], self.cmd[s], limits, dt
-        )
+        cmd = self.cmd[s]
+        if self._scale is not None:  # safety fields: 0 stops at once, < 1 caps the command
+            scale = self._scale[s]
+            self.vel[s[scale <= 0.0]] = 0.0
+            cmd = cmd * scale[:, None]
+        self.vel[s] = advance_velocity(self._store, self.row[s], self.vel[s], cmd, limits, dt)

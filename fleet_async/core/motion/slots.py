@@ -192,6 +192,12 @@ class SlotTable:
         """Store rows of the slots following a path (POSE mode), ascending by slot."""
         return self._moving_slots()[1]
 
+    def commanded_rows(self) -> np.ndarray:
+        """Store rows of the slots following a path or a velocity command (what the safety
+        fields watch): the POSE slots' rows, then the VELOCITY slots'."""
+        _, rows, _, velocity = self._moving_slots()
+        return np.concatenate((rows, self.row[velocity])) if len(velocity) else rows
+
     def segment_directions(self) -> tuple[np.ndarray, np.ndarray]:
         """(store rows, (K, 2) unit ground-plane directions) of the path-following slots whose
         current segment moves them (turns in place have none)."""
@@ -206,8 +212,9 @@ class SlotTable:
 
         0 holds a slot where it is (its path and profile wait, to resume from where they
         stopped), 0.5 drives it at half its speed; None (the default) drives every slot as
-        planned. Set before each step by the safety fields (``collision/safety.py``);
-        velocity commands are not scaled.
+        planned. Set before each step by the safety fields (``collision/safety.py``). A
+        velocity command is scaled too: 0 stops the slot at once (its velocity drops to zero),
+        a fraction caps the command, from which the slot ramps within its limits.
 
         Args:
             scale_of_row: (rows,) floats indexed by store row, covering every slot's row.

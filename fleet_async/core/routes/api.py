@@ -44,7 +44,8 @@ class RoutesApi:
         layout_id: str | None = None,
         vehicle_type: str | None = None,
     ) -> RouteGraph:
-        """Load a YAML graph or a LIF layout (``routes/loaders.py``) and use it; return it."""
+        """Load a YAML graph, an Open-RMF nav graph or a LIF layout (``routes/loaders.py``)
+        and use it; return it."""
         graph = load_route_graph(source, layout_id=layout_id, vehicle_type=vehicle_type)
         self._route_graph = graph
         self._trace_graph(graph)

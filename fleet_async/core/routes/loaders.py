@@ -1,4 +1,5 @@
-"""Route graphs from files: a simple YAML graph, and LIF (VDMA's Layout Interchange Format).
+"""Route graphs from files: a simple YAML graph, LIF (VDMA's Layout Interchange Format) and
+Open-RMF nav graphs (a YAML file with ``levels``: ``routes/rmf.py``).
 
 YAML graph (every key checked; an unknown one is an error naming it and the file)::
 
@@ -31,6 +32,7 @@ from typing import Any
 
 from fleet_async.core.base.config_utils import load_yaml_config
 from fleet_async.core.routes.graph import RouteGraph, RouteNode
+from fleet_async.core.routes.rmf import route_graph_from_rmf
 
 __all__ = ["load_route_graph", "route_graph_from_lif", "route_graph_from_mapping"]
 
@@ -45,13 +47,16 @@ def load_route_graph(
     layout_id: str | None = None,
     vehicle_type: str | None = None,
 ) -> RouteGraph:
-    """A route graph from a YAML graph or a LIF file (``.json`` / ``.lif``), or a mapping.
+    """A route graph from a YAML graph, an Open-RMF nav graph (YAML with ``levels``) or a LIF
+    file (``.json`` / ``.lif``), or a mapping of one of them.
 
     Raises:
         FileNotFoundError: for a missing file.
         ValueError: for a malformed graph, naming the file, the key and the value.
     """
     if isinstance(source, Mapping):
+        if "levels" in source:
+            return route_graph_from_rmf(source)
         if "layouts" in source:
             return route_graph_from_lif(source, layout_id=layout_id, vehicle_type=vehicle_type)
         return route_graph_from_mapping(source)
@@ -66,7 +71,10 @@ def load_route_graph(
         return route_graph_from_lif(
             data, layout_id=layout_id, vehicle_type=vehicle_type, source=str(path)
         )
-    return route_graph_from_mapping(load_yaml_config(path, allow_empty=False), source=str(path))
+    data = load_yaml_config(path, allow_empty=False)
+    if isinstance(data, Mapping) and "levels" in data:  # an Open-RMF nav graph
+        return route_graph_from_rmf(data, source=str(path))
+    return route_graph_from_mapping(data, source=str(path))
 
 
 def _where(source: str | None) -> str:

@@ -85,3 +85,32 @@ def test_a_map_is_in_the_trace_as_its_rectangles(tmp_path, before):
     x0, y0, x1, y1 = data["rects"][0]
     assert [x0, y0] == pytest.approx(loaded.lo[0, :2])
     assert [x1, y1] == pytest.approx(loaded.hi[0, :2])
+
+
+@pytest.mark.parametrize("how", ["add_grid_map", "add_map"])
+def test_a_map_made_in_code_is_kept_and_traced_too(tmp_path, how):
+    import numpy as np
+
+    from fleet_async import OccupancyGrid
+    from fleet_async.core.maps import add_grid_map
+
+    path = tmp_path / "grid.fatrace"
+    occupied = np.zeros((6, 8), dtype=bool)
+    occupied[2, 1:7] = True
+    grid = OccupancyGrid(occupied, resolution=0.5, origin=(0.0, 0.0))
+    with MultiRobotSimulationCore(headless_params()) as sim:
+        early = add_grid_map(sim, grid, name="early")  # before the trace: at its start
+        sim.start_trace(path)
+        sim.step_once()
+        if how == "add_grid_map":
+            late = add_grid_map(sim, grid, height=2.0, name="late")
+        else:
+            late = sim.add_map(grid, height=2.0, name="late")
+        sim.step_once()
+        sim.stop_trace()
+        assert sim.maps == [early, late]
+    first, second = events_of(path, "map_loaded")
+    assert first["step"] == 0 and first["data"]["name"] == "early"
+    assert second["step"] == 1 and second["data"]["name"] == "late"
+    assert second["data"]["bodies"] == [b.object_id for b in late.bodies]
+    assert second["data"]["rects"] == [[0.5, 1.0, 3.5, 1.5]]
