@@ -25,12 +25,14 @@ from fleet_async import bench
 HERE = Path(__file__).resolve().parent
 
 
-def incumbent_step_ms(venv: str, n: int) -> float:
-    """Mean ms per timed step of the fleet workload on the incumbent (a fresh process)."""
+def incumbent_step_ms(venv: str, n: int) -> tuple[float, float]:
+    """Mean wall and CPU ms per timed step of the fleet workload on the incumbent (a fresh
+    process)."""
     python = str(Path(venv) / "bin" / "python")
     cmd = [python, str(HERE / "seed_api_workloads.py"), "--package", "pybullet_fleet"]
     out = subprocess.run([*cmd, "fleet", str(n)], capture_output=True, text=True, check=True)
-    return float(json.loads(out.stdout.strip().splitlines()[-1])["step_ms"])
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    return float(result["step_ms"]), float(result["step_cpu_ms"])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -54,28 +56,31 @@ def main(argv: list[str] | None = None) -> int:
     sizes = [*(args.n or bench.DEFAULT_SIZES), *([bench.LARGE_SIZE] if args.large else [])]
     for n in sizes:
         ours: list[dict[str, Any]] = []
-        theirs: list[float] = []
+        theirs: list[tuple[float, float]] = []
         for i in range(max(1, args.repeat)):  # interleaved: both sides see the same machine
-            ours.append(bench.run(n, args.profile, args.sweep, memory=i == 0))
+            ours.append(bench.run(n, args.profile, args.sweep, i == 0, args.kernels))
             if n <= args.incumbent_max:
                 theirs.append(incumbent_step_ms(args.incumbent, n))
-        result = dict(ours[0])
-        result["step_ms_runs"] = [r["step_ms"] for r in ours]
-        result["step_ms"] = statistics.median(result["step_ms_runs"])
-        result["real_time_factor"] = bench.TIMESTEP * 1000.0 / result["step_ms"]
+        result = bench.summarize(ours)
         if theirs:
-            result["incumbent_step_ms_runs"] = theirs
-            result["incumbent_step_ms"] = statistics.median(theirs)
+            result["incumbent_step_ms_runs"] = [wall for wall, _ in theirs]
+            result["incumbent_step_cpu_ms_runs"] = [cpu for _, cpu in theirs]
+            result["incumbent_step_ms"] = statistics.median(result["incumbent_step_ms_runs"])
+            result["incumbent_step_cpu_ms"] = statistics.median(
+                result["incumbent_step_cpu_ms_runs"]
+            )
             result["speedup"] = result["incumbent_step_ms"] / result["step_ms"]
+            result["speedup_cpu"] = result["incumbent_step_cpu_ms"] / result["step_cpu_ms"]
         if args.json:
             print(json.dumps(result), flush=True)
             continue
         print(bench.format_result(result), flush=True)
         if theirs:
-            runs = ", ".join(f"{ms:.3f}" for ms in theirs)
+            runs = ", ".join(f"{ms:.3f}" for ms in result["incumbent_step_ms_runs"])
             print(
                 f"    pybullet-fleet: step {result['incumbent_step_ms']:8.3f} ms "
-                f"(runs {runs})  speed-up {result['speedup']:.1f}x",
+                f"(CPU {result['incumbent_step_cpu_ms']:.3f}; runs {runs})  "
+                f"speed-up {result['speedup']:.1f}x (CPU {result['speedup_cpu']:.1f}x)",
                 flush=True,
             )
     return 0
