@@ -6,8 +6,12 @@ the reference API (``seed_api_workloads.py fleet``), also runs on pybullet-fleet
 in its own process, right after each fleet_async run of the same size (sizes up to
 ``--incumbent-max``), and the report adds its step time and the speed-up.
 
+With ``--numpy-too`` each run of the chosen kernels is followed by one with
+``kernels="numpy"`` (the compiled kernels' A/B).
+
 Run:  python benchmarks/fleet_bench.py [--n 100 1000 10000] [--large] [--repeat R] [--sweep]
-          [--json] [--profile] [--incumbent /tmp/pbf [--incumbent-max 10000]]
+          [--json] [--profile] [--kernels auto|numpy|numba] [--numpy-too]
+          [--incumbent /tmp/pbf [--incumbent-max 10000]]
 """
 
 from __future__ import annotations
@@ -41,6 +45,11 @@ def main(argv: list[str] | None = None) -> int:
     bench.add_arguments(parser)
     parser.add_argument("--incumbent", metavar="VENV", help="pybullet-fleet venv to compare with")
     parser.add_argument(
+        "--numpy-too",
+        action="store_true",
+        help="also run each size with kernels='numpy', interleaved, and report the ratio",
+    )
+    parser.add_argument(
         "--incumbent-max",
         type=int,
         default=10000,
@@ -48,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         help="largest size also run on the incumbent (default %(default)s)",
     )
     args = parser.parse_args(argv)
-    if args.incumbent is None:
+    if args.incumbent is None and not args.numpy_too:
         try:
             return bench.run_from_args(args)
         except ValueError as exc:
@@ -56,12 +65,20 @@ def main(argv: list[str] | None = None) -> int:
     sizes = [*(args.n or bench.DEFAULT_SIZES), *([bench.LARGE_SIZE] if args.large else [])]
     for n in sizes:
         ours: list[dict[str, Any]] = []
+        plain: list[dict[str, Any]] = []
         theirs: list[tuple[float, float]] = []
-        for i in range(max(1, args.repeat)):  # interleaved: both sides see the same machine
+        for i in range(max(1, args.repeat)):  # interleaved: every side sees the same machine
             ours.append(bench.run(n, args.profile, args.sweep, i == 0, args.kernels))
-            if n <= args.incumbent_max:
+            if args.numpy_too:
+                plain.append(bench.run(n, args.profile, args.sweep, False, "numpy"))
+            if args.incumbent is not None and n <= args.incumbent_max:
                 theirs.append(incumbent_step_ms(args.incumbent, n))
         result = bench.summarize(ours)
+        if plain:
+            numpy_side = bench.summarize(plain)
+            for key in ("step_ms", "step_cpu_ms"):
+                result[f"numpy_{key}"] = numpy_side[key]
+                result[f"numpy_{key}_runs"] = numpy_side[f"{key}_runs"]
         if theirs:
             result["incumbent_step_ms_runs"] = [wall for wall, _ in theirs]
             result["incumbent_step_cpu_ms_runs"] = [cpu for _, cpu in theirs]
@@ -75,6 +92,13 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(result), flush=True)
             continue
         print(bench.format_result(result), flush=True)
+        if plain:
+            runs = ", ".join(f"{ms:.3f}" for ms in result["numpy_step_cpu_ms_runs"])
+            print(
+                f"    kernels=numpy: step {result['numpy_step_ms']:8.3f} ms "
+                f"(CPU {result['numpy_step_cpu_ms']:.3f}; CPU runs {runs})",
+                flush=True,
+            )
         if theirs:
             runs = ", ".join(f"{ms:.3f}" for ms in result["incumbent_step_ms_runs"])
             print(
