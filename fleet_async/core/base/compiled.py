@@ -7,10 +7,12 @@ Linux, macOS and Windows, no compiler needed); the numpy code is the reference a
 there. Both give the same results bit for bit (``tests/core/test_compiled.py`` runs both on
 one seeded workload), so which one runs changes only the speed.
 
-``SimulationParams.kernels`` picks: ``"auto"`` (the default) uses numba when it imports,
-``"numpy"`` never does, ``"numba"`` requires it and fails with an ``ImportError`` saying how to
+``SimulationParams.kernels`` picks: ``"numpy"`` (the default) never uses numba, ``"auto"`` uses
+it when it imports, ``"numba"`` requires it and fails with an ``ImportError`` saying how to
 install it. Kernels are compiled on their first call and cached on disk (``cache=True``), so
-only the first run on a machine pays the compilation (see docs/performance.md).
+only the first run on a machine pays the compilation (about 7 s of CPU); every later process
+still pays about a second on its first step to import numba and load the cached kernels, which
+is why numpy stays the default (measured in docs/performance.md).
 """
 
 from __future__ import annotations

@@ -102,10 +102,12 @@ class SimulationParams:
             (> 0; default 0.5). A grid or a scenario whose bodies would need more is refused
             before anything is built, saying how much it needs (at least 16 KiB a body; a
             mobile robot from a URDF takes about 100 KiB). Raise it (e.g. 0.9) to allow more.
-        kernels: How the step's hot loops run: "auto" (compiled numba kernels when numba is
-            installed, the ``fast`` extra; else numpy), "numpy", or "numba" (required: an
-            ``ImportError`` says how to install it when it is missing). The results are the
-            same bit for bit; see ``base/compiled.py`` and docs/performance.md.
+        kernels: How the step's hot loops run: "numpy" (the default), "auto" (compiled numba
+            kernels when numba is installed, the ``fast`` extra; else numpy) or "numba"
+            (required: an ``ImportError`` says how to install it when it is missing). The
+            results are the same bit for bit; the kernels pay off in long runs and large
+            fleets, while a process's first step with them costs about a second of loading
+            (see ``base/compiled.py`` and docs/performance.md, "The bare step at the edge").
     """
 
     target_rtf: float = 1.0
@@ -146,7 +148,7 @@ class SimulationParams:
     sync_pybullet_every_step: bool = False
     collision_sweep: bool = False
     memory_share: float = 0.5
-    kernels: str = "auto"
+    kernels: str = "numpy"
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(

@@ -19,6 +19,7 @@ from fleet_async.core.motion.slots import AT, PROFILE_AT
 
 __all__ = ["advance_translation"]
 
+
 # Column indices into the slot matrix, frozen into the kernel when it compiles.
 def _first(name: str) -> int:
     """Index of the column's first entry in the matrix."""
