@@ -29,11 +29,16 @@ BOX = ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
 STEPS = 120
 
 
-def _fleet(kernels: str, n: int, seed: int, flat: bool = False) -> MultiRobotSimulationCore:
+def _fleet(
+    kernels: str, n: int, seed: int, flat: bool = False, sweep: bool = False
+) -> MultiRobotSimulationCore:
     """n boxes on a 1 m grid, omni and differential, with seeded goals, paths and headings;
-    with ``flat`` a third are NORMAL_2D and a static wall stands among them."""
+    with ``flat`` a third are NORMAL_2D and a static wall stands among them; ``sweep``: swept
+    collision checks."""
     sim = MultiRobotSimulationCore(
-        headless_params(kernels=kernels, collision_margin=0.02, enable_floor=False)
+        headless_params(
+            kernels=kernels, collision_margin=0.02, enable_floor=False, collision_sweep=sweep
+        )
     )
     rng = np.random.default_rng(seed)
     side = math.ceil(math.sqrt(n))
@@ -109,6 +114,13 @@ def test_numba_and_numpy_give_the_same_bits_step_by_step(n, seed):
 def test_flat_objects_and_a_static_wall_hand_over_to_numpy_with_the_same_result():
     _assert_same(
         _trace(_fleet("numpy", 200, 3, flat=True), 60), _trace(_fleet("numba", 200, 3, True), 60)
+    )
+
+
+def test_swept_checks_give_the_same_bits():
+    _assert_same(
+        _trace(_fleet("numpy", 150, 4, sweep=True), 60),
+        _trace(_fleet("numba", 150, 4, sweep=True), 60),
     )
 
 
