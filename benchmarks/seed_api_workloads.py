@@ -114,12 +114,19 @@ def fleet(m: dict[str, Any], n: int) -> dict[str, Any]:
     gc.collect()
     for _ in range(WARMUP_STEPS):
         sim.step_once()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for _ in range(TIMED_STEPS):
         sim.step_once()
     step_ms = (time.perf_counter() - t0) * 1000.0 / TIMED_STEPS
+    step_cpu_ms = (time.process_time() - c0) * 1000.0 / TIMED_STEPS
     _close(sim)
-    return {"workload": "fleet", "n": n, "step_ms": step_ms, "spawn_s": spawn_s}
+    return {
+        "workload": "fleet",
+        "n": n,
+        "step_ms": step_ms,
+        "step_cpu_ms": step_cpu_ms,
+        "spawn_s": spawn_s,
+    }
 
 
 def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:

@@ -38,6 +38,7 @@ import numpy as np
 
 from fleet_async.core.agents.agent import Agent
 from fleet_async.core.agents.agent_params import AgentSpawnParams
+from fleet_async.core.base.compiled import KERNEL_MODES, use_numba
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.base.types import CollisionDetectionMethod
 from fleet_async.core.geometry.pose import Pose
@@ -60,6 +61,7 @@ __all__ = [
     "run_repeated",
     "set_goals",
     "spawn_fleet",
+    "summarize",
 ]
 
 WARMUP_STEPS = 10
@@ -137,7 +139,13 @@ def set_goals(agents: list[Agent], n: int) -> None:
         agents[idx].set_goal_pose(Pose.from_xyz(gx, gy, 0.1))
 
 
-def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True) -> dict[str, Any]:
+def run(
+    n: int,
+    profile: bool = False,
+    sweep: bool = False,
+    memory: bool = True,
+    kernels: str = "auto",
+) -> dict[str, Any]:
     """Run the workload for N agents.
 
     Args:
@@ -145,17 +153,19 @@ def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True)
         profile: Also return ``phases_ms``: mean ms per timed step of each step phase.
         sweep: Run with ``collision_sweep=True``.
         memory: Measure the Python heap per agent (a second, traced spawn); else None.
+        kernels: ``SimulationParams.kernels`` ("auto", "numpy" or "numba").
 
     Returns:
-        ``n``, ``step_ms`` (mean wall ms per timed step), ``real_time_factor``, ``spawn_s``
+        ``n``, ``step_ms`` (mean wall ms per timed step), ``step_cpu_ms`` (mean CPU ms of this
+        process per timed step), ``kernels`` (which ran: "numpy" or "numba"),
+        ``real_time_factor``, ``spawn_s``
         (wall seconds), ``python_heap_kb_per_agent``, ``rss_kb_per_agent``, ``moving_after``
         (agents still moving after the timed steps), ``collisions``, ``collision_sweep`` and,
         with ``profile``, ``phases_ms``.
     """
     gc.collect()
-    with MultiRobotSimulationCore(
-        dataclasses.replace(bench_params(), collision_sweep=sweep)
-    ) as sim:
+    params = dataclasses.replace(bench_params(), collision_sweep=sweep, kernels=kernels)
+    with MultiRobotSimulationCore(params) as sim:
         rss0 = _rss_bytes()
         t0 = time.perf_counter()
         agents = spawn_fleet(sim, n)
@@ -168,18 +178,21 @@ def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True)
         for _ in range(WARMUP_STEPS):
             sim.step_once()
         phases: dict[str, float] = {}
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         for _ in range(TIMED_STEPS):
             timings = sim.step_once(return_profiling=profile)
             for key, value in (timings or {}).items():
                 if isinstance(value, float):  # not the nested collision_breakdown
                     phases[key] = phases.get(key, 0.0) + value / TIMED_STEPS
         step_ms = (time.perf_counter() - t0) * 1000.0 / TIMED_STEPS
+        step_cpu_ms = (time.process_time() - c0) * 1000.0 / TIMED_STEPS
         moving = sum(a.is_moving for a in agents)
         collisions = sim.collision_count
     result: dict[str, Any] = {
         "n": n,
         "step_ms": step_ms,
+        "step_cpu_ms": step_cpu_ms,
+        "kernels": "numba" if use_numba(kernels) else "numpy",
         "real_time_factor": TIMESTEP * 1000.0 / step_ms,
         "spawn_s": spawn_s,
         "python_heap_kb_per_agent": python_heap_per_agent(n) if memory else None,
@@ -194,14 +207,21 @@ def run(n: int, profile: bool = False, sweep: bool = False, memory: bool = True)
 
 
 def run_repeated(
-    n: int, repeat: int = 1, profile: bool = False, sweep: bool = False
+    n: int, repeat: int = 1, profile: bool = False, sweep: bool = False, kernels: str = "auto"
 ) -> dict[str, Any]:
     """:func:`run` ``repeat`` times (fresh simulations); the first run's result with
-    ``step_ms`` the median of all and ``step_ms_runs`` every run's, in order."""
-    runs = [run(n, profile, sweep, memory=i == 0) for i in range(max(1, repeat))]
+    ``step_ms`` / ``step_cpu_ms`` the medians of all and ``step_ms_runs`` /
+    ``step_cpu_ms_runs`` every run's, in order."""
+    runs = [run(n, profile, sweep, i == 0, kernels) for i in range(max(1, repeat))]
+    return summarize(runs)
+
+
+def summarize(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """The first of several :func:`run` results with the medians and every run's times."""
     result = dict(runs[0])
-    result["step_ms_runs"] = [r["step_ms"] for r in runs]
-    result["step_ms"] = statistics.median(result["step_ms_runs"])
+    for key in ("step_ms", "step_cpu_ms"):
+        result[f"{key}_runs"] = [r[key] for r in runs]
+        result[key] = statistics.median(result[f"{key}_runs"])
     result["real_time_factor"] = TIMESTEP * 1000.0 / result["step_ms"]
     return result
 
@@ -210,7 +230,8 @@ def format_result(result: dict[str, Any]) -> str:
     """The human-readable report of one :func:`run` result (lines joined by newlines)."""
     runs = result.get("step_ms_runs") or [result["step_ms"]]
     lines = [
-        f"N={result['n']:>6}: step {result['step_ms']:8.3f} ms  "
+        f"N={result['n']:>6}: step {result['step_ms']:8.3f} ms "
+        f"(CPU {result.get('step_cpu_ms', math.nan):.3f}, {result.get('kernels', '?')})  "
         f"RTF {result['real_time_factor']:8.1f}x  spawn {result['spawn_s']:6.3f} s  "
         f"heap {result['python_heap_kb_per_agent'] or 0.0:5.2f} KB/agent  "
         f"RSS {result['rss_kb_per_agent']:5.2f} KB/agent  collisions {result['collisions']}"
@@ -218,6 +239,8 @@ def format_result(result: dict[str, Any]) -> str:
     ]
     if len(runs) > 1:
         lines.append("    step ms per run: " + ", ".join(f"{ms:.3f}" for ms in runs))
+        cpu = result.get("step_cpu_ms_runs") or []
+        lines.append("    CPU ms per run:  " + ", ".join(f"{ms:.3f}" for ms in cpu))
     phases = result.get("phases_ms")
     if phases is not None:
         for key, value in sorted(phases.items(), key=lambda kv: -kv[1]):
@@ -260,6 +283,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--sweep", action="store_true", help="run with collision_sweep=True (swept checks)"
     )
     parser.add_argument(
+        "--kernels",
+        choices=KERNEL_MODES,
+        default="auto",
+        help="SimulationParams.kernels: compiled numba kernels when installed (auto), "
+        "never (numpy) or required (numba) (default %(default)s)",
+    )
+    parser.add_argument(
         "--realistic",
         action="store_true",
         help="the realistic-fleet workload (batteries, patrols, random walks, missions, "
@@ -292,7 +322,7 @@ def run_from_args(args: argparse.Namespace, out: TextIO | None = None) -> int:
     if args.repeat < 1:
         raise ValueError(f"--repeat: expected a number of runs >= 1, got {args.repeat}")
     for n in sizes:
-        result = run_repeated(n, args.repeat, profile=args.profile, sweep=args.sweep)
+        result = run_repeated(n, args.repeat, args.profile, args.sweep, args.kernels)
         print(json.dumps(result) if args.json else format_result(result), file=stream)
         stream.flush()
     return 0

@@ -25,6 +25,7 @@ from fleet_async.core.actions.action_queue import ActionQueue
 from fleet_async.core.agents.agent_plugins import AgentPlugin, BatteryPlugin
 from fleet_async.core.agents.batteries import BatteryBank
 from fleet_async.core.agents.controller_schedule import ControllerSchedule
+from fleet_async.core.base.compiled import use_numba
 from fleet_async.core.motion.kinematics import KinematicEngine
 from fleet_async.core.motion.segments import MotionLimits
 
@@ -40,7 +41,8 @@ class FleetMotion:
 
     def __init__(self, sim: FleetHost) -> None:
         self._sim = sim
-        self.engine = KinematicEngine(sim.state, self._on_motion_end)
+        self._compiled = use_numba(sim.params.kernels)
+        self.engine = KinematicEngine(sim.state, self._on_motion_end, self._compiled)
         self.actions = ActionQueue(sim)
         self._slot_agent: dict[int, Agent] = {}
         self._controlled = ControllerSchedule()
@@ -173,7 +175,7 @@ class FleetMotion:
 
     def reset(self) -> None:
         """Forget every agent (simulation reset)."""
-        self.engine = KinematicEngine(self._sim.state, self._on_motion_end)
+        self.engine = KinematicEngine(self._sim.state, self._on_motion_end, self._compiled)
         self.actions.reset()
         self._slot_agent.clear()
         self._controlled.clear()

@@ -8,6 +8,7 @@ from pathlib import Path as FsPath
 from typing import Any
 
 from fleet_async.core.base.camera_config import CameraConfig, parse_camera_config
+from fleet_async.core.base.compiled import KERNEL_MODES
 from fleet_async.core.base.config_utils import dataclass_from_dict, load_yaml_config
 from fleet_async.core.base.reprs import short_repr
 from fleet_async.core.base.types import (
@@ -101,6 +102,12 @@ class SimulationParams:
             (> 0; default 0.5). A grid or a scenario whose bodies would need more is refused
             before anything is built, saying how much it needs (at least 16 KiB a body; a
             mobile robot from a URDF takes about 100 KiB). Raise it (e.g. 0.9) to allow more.
+        kernels: How the step's hot loops run: "numpy" (the default), "auto" (compiled numba
+            kernels when numba is installed, the ``fast`` extra; else numpy) or "numba"
+            (required: an ``ImportError`` says how to install it when it is missing). The
+            results are the same bit for bit; the kernels pay off in long runs and large
+            fleets, while a process's first step with them costs about a second of loading
+            (see ``base/compiled.py`` and docs/performance.md, "The bare step at the edge").
     """
 
     target_rtf: float = 1.0
@@ -141,6 +148,7 @@ class SimulationParams:
     sync_pybullet_every_step: bool = False
     collision_sweep: bool = False
     memory_share: float = 0.5
+    kernels: str = "numpy"
 
     def __post_init__(self) -> None:
         self.spatial_hash_cell_size_mode = coerce_enum(
@@ -160,6 +168,7 @@ class SimulationParams:
         level = self.log_level.lower() if isinstance(self.log_level, str) else self.log_level
         _require(level in LOG_LEVELS, "log_level", self.log_level, f"one of {LOG_LEVELS}")
         self.log_level = level
+        _require(self.kernels in KERNEL_MODES, "kernels", self.kernels, f"one of {KERNEL_MODES}")
         _require(
             self.camera_config is None or isinstance(self.camera_config, dict),
             "camera_config",

@@ -14,6 +14,9 @@ flood the hash, so they are kept aside and tested against every object by AABB i
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 
 __all__ = ["aabb_overlap", "auto_cell_size", "candidate_pairs"]
@@ -69,6 +72,7 @@ def candidate_pairs(
     cell_size: float,
     multi_cell_threshold: float,
     bounds: np.ndarray | None = None,
+    kernel: Callable[..., Any] | None = None,
 ) -> np.ndarray:
     """Index pairs (i < j) whose AABBs share a hash cell and where i or j moved.
 
@@ -83,17 +87,23 @@ def candidate_pairs(
             tested against everything instead of being hashed.
         bounds: (2, N, 3) minima and maxima in one array, when the caller holds them so
             (``aabb_min`` / ``aabb_max`` are then its halves): one numpy call floors both.
+        kernel: ``check_jit.SharedCellPairs`` to find the same pairs in one compiled
+            call (used when no object is NORMAL_2D and none spans more than the threshold).
 
     Returns:
         (K, 2) int64 array of unique pairs in ascending order, ``i < j`` in each.
     """
     n = len(aabb_min)
-    if n < 2 or not np.count_nonzero(moved):
+    n_moved = np.count_nonzero(moved) if n >= 2 else 0
+    if not n_moved:
         return _EMPTY
-    movers = moved.nonzero()[0]
-    if len(movers) <= _FEW_MOVERS and n >= _FEW_MIN_ROWS and bounds is not None:
-        return _few_movers_pairs(aabb_min, aabb_max, flat, movers, n)
+    if n_moved <= _FEW_MOVERS and n >= _FEW_MIN_ROWS and bounds is not None:
+        return _few_movers_pairs(aabb_min, aabb_max, flat, moved.nonzero()[0], n)
     inv = 1.0 / cell_size
+    if kernel is not None and flat is None:
+        pairs, done = kernel(aabb_min, aabb_max, moved, inv, float(multi_cell_threshold))
+        if done:
+            return pairs
     if bounds is not None:
         cells = np.floor(bounds * inv).astype(np.int64)
         lo = cells[0]

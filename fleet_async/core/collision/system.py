@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pybullet as p
 
+from fleet_async.core.base.compiled import use_numba
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.base.types import CollisionDetectionMethod, SpatialHashCellSizeMode
 from fleet_async.core.collision.broadphase import auto_cell_size, candidate_pairs
@@ -67,6 +68,14 @@ class CollisionSystem:
         self.ignore_static = prm.ignore_static_collision
         self.color_change = prm.enable_collision_color_change
         self.sweep = prm.collision_sweep
+        # check_jit's kernels, when numba is used (base/compiled.py)
+        self._kernel: Callable[..., Any] | None = None
+        self._refresh_kernel: Callable[..., int] | None = None
+        if use_numba(prm.kernels):
+            from fleet_async.core.collision.check_jit import SharedCellPairs, refresh_upright
+
+            self._kernel = SharedCellPairs()
+            self._refresh_kernel = refresh_upright
         pad = self.margin / 2 if self.method is not CollisionDetectionMethod.CONTACT_POINTS else 0.0
 
         world = sim.world
@@ -181,21 +190,35 @@ class CollisionSystem:
         self._prepare()
         return self._rows
 
-    def _prepare(self) -> np.ndarray:
-        """Register new / changed rows and refresh moved ones; return the moved rows."""
+    def _prepare(self) -> int:
+        """Register new / changed rows and refresh moved ones; return how many moved."""
         store = self._sim.state
         high = store.high_water
         if store.layout_version != self._layout:
             self._relayout()
             self._relaid = True
         flags = store.moved[:high]
+        if self._refresh_kernel is not None and self._plain:
+            geo = self.geometry
+            count = self._refresh_kernel(
+                store.position,
+                store.orientation,
+                geo.offsets,
+                geo.box,
+                geo.aabb,
+                geo.exact,
+                flags,
+                high,
+            )
+            if count >= 0:
+                return count
         moved = flags.nonzero()[0] if np.count_nonzero(flags) else _NO_ROWS
         # Most rows moved, or few rows in all, and none is special: one pass over every row
         # beats gathers (below _WHOLE_MAX rows a pass costs what a gather does).
         whole = self._plain and (4 * len(moved) >= high or high <= _WHOLE_MAX)
         if len(moved) and not (whole and self.geometry.refresh_all(high, store)):
             self.geometry.refresh(moved, store)
-        return moved
+        return len(moved)
 
     def _relayout(self) -> None:
         """Rows were added, removed or changed mode: register the new ones, cache row sets."""
@@ -268,13 +291,13 @@ class CollisionSystem:
     ) -> tuple[np.ndarray, dict[str, float]]:
         """Row pairs (i < j) whose AABBs overlap (inflated by the margin), with timings in ms."""
         t0 = time.perf_counter()
-        moved_rows = self._prepare()
+        n_moved = self._prepare()
         t1 = time.perf_counter()
         store = self._sim.state
         if moved_ids is not None:
             ids = np.fromiter(moved_ids, dtype=np.int64, count=len(moved_ids))
             pairs = self._broad_phase(np.isin(store.object_id[self._rows], ids), ignore_static)
-        elif len(moved_rows):
+        elif n_moved:
             pairs = self._broad_phase(None, ignore_static)
         else:
             pairs = _NO_PAIRS
@@ -320,7 +343,7 @@ class CollisionSystem:
             # tested that way.
             threshold = max(threshold, _SWEPT_CELLS)
         cell = self.resolve_cell_size(rows)
-        idx = candidate_pairs(amin, amax, flat, moved, cell, threshold, side_by_side)
+        idx = candidate_pairs(amin, amax, flat, moved, cell, threshold, side_by_side, self._kernel)
         # (Not skipping static rows, static-static pairs are checked too, once: they never move.)
         if not len(idx):
             return _NO_PAIRS
@@ -330,11 +353,10 @@ class CollisionSystem:
 
     def run(self) -> None:
         """The step's check: like :meth:`check`, without building its return value."""
-        moved_rows = self._prepare()
-        if len(moved_rows):
-            self._finish(self._broad_phase(None, None, self.sweep), moved_rows, None, False)
+        if self._prepare():
+            self._finish(self._broad_phase(None, None, self.sweep), None, False)
         elif self._relaid and len(self._active):
-            self._finish(_NO_PAIRS, moved_rows, None, True)  # contacts of removed objects end
+            self._finish(_NO_PAIRS, None, True)  # contacts of removed objects end
         # else nothing moved and nobody left: no pair can have started or ended
         self._relaid = False
 
@@ -346,18 +368,16 @@ class CollisionSystem:
         the collision events' handlers, ``total``)."""
         t0 = time.perf_counter()
         if self.sweep:
-            moved_rows = self._prepare()
             row_pairs = (
-                self._broad_phase(None, ignore_static, True) if len(moved_rows) else _NO_PAIRS
+                self._broad_phase(None, ignore_static, True) if self._prepare() else _NO_PAIRS
             )
             timings = {"get_aabbs": 0.0, "spatial_hashing": 0.0, "aabb_filtering": 0.0}
             checked = False
         else:
             row_pairs, timings = self.filter_pairs(ignore_static)
-            moved_rows = self._sim.state.moved[: self._sim.state.high_water].nonzero()[0]
             checked = True
         t1 = time.perf_counter()
-        events_ms = self._finish(row_pairs, moved_rows, collision_color, checked)
+        events_ms = self._finish(row_pairs, collision_color, checked)
         self._relaid = False
         timings["contact_points"] = (time.perf_counter() - t1) * 1e3 - events_ms
         timings["events"] = events_ms
@@ -367,7 +387,6 @@ class CollisionSystem:
     def _finish(
         self,
         row_pairs: np.ndarray,
-        moved_rows: np.ndarray,
         color: list[float] | None,
         aabb_checked: bool,
     ) -> float:
@@ -379,8 +398,9 @@ class CollisionSystem:
             self._sweep_test(row_pairs, touching)
         ended, started = self._active.update(row_pairs.compress(touching, axis=0), store)
         if self.sweep:
+            moved_rows = store.moved[: store.high_water].nonzero()[0]
             self._start[moved_rows] = store.position[moved_rows]
-        store.moved[: store.high_water] = False  # moved_rows are all the flagged rows: a fill
+        store.moved[: store.high_water] = False
         if not (len(ended) or len(started)):
             return 0.0
         t0 = time.perf_counter()

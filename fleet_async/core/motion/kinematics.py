@@ -39,7 +39,8 @@ import numpy as np
 
 from fleet_async.core.base.types import MovementDirection
 from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.geometry.quaternions import quat_from_euler, quat_slerp_batch, yaw_from_quats
+from fleet_async.core.geometry.quaternions import quat_from_euler, yaw_from_quats
+from fleet_async.core.motion.advance import PoseAdvance
 from fleet_async.core.motion.segments import (
     EPS_ANGLE,
     EPS_LEN,
@@ -49,16 +50,12 @@ from fleet_async.core.motion.segments import (
     profile_terms,
     segment_rates,
     trapezoid_duration,
-    trapezoid_progress,
 )
 from fleet_async.core.motion.slots import (
-    AT,
     COLUMNS,
     IDLE,
     POSE,
-    PROFILE_AT,
     VELOCITY,
-    SlotTable,
     flat_rows,
 )
 from fleet_async.core.motion.velocity import advance_velocity, body_velocity
@@ -82,16 +79,22 @@ class _Plan:
     aligned: bool = False
 
 
-class KinematicEngine(SlotTable):
+class KinematicEngine(PoseAdvance):
     """Moves every slot's row of the state store by its path or velocity command.
 
     Args:
         store: The simulation's state store.
         on_motion_end: Called ``(slot, reached)`` when a slot stops: ``reached`` is True when it
             finished its path, False when stopped or replaced.
+        compiled: Advance path-following slots with the numba kernel (``advance.py``).
     """
 
-    def __init__(self, store: KinematicState, on_motion_end: Callable[[int, bool], None]) -> None:
+    def __init__(
+        self,
+        store: KinematicState,
+        on_motion_end: Callable[[int, bool], None],
+        compiled: bool = False,
+    ) -> None:
         self._store = store
         self._on_motion_end = on_motion_end
         self._free: list[int] = []
@@ -99,6 +102,7 @@ class KinematicEngine(SlotTable):
         self._plans: list[_Plan | None] = []
         super().__init__()
         self._alloc(16)
+        self._use_kernel(compiled)
 
     # ----- slots --------------------------------------------------------------------------
 
@@ -436,60 +440,10 @@ class KinematicEngine(SlotTable):
         elif self.mode[slot] == VELOCITY:
             self._advance_velocity(np.array([slot]), dt)
 
-    def _advance_pose(self, s: np.ndarray, rows: np.ndarray, flat: np.ndarray, dt: float) -> None:
-        # One gather of the float columns a step reads (see slots.py); a 100-robot step is a
-        # few dozen numpy calls, so each one saved counts.
-        f = self._move_block.take(s, axis=1)  # (columns, slots): f[AT[name]] is one column
-        store = self._store
-        steps = f[AT["steps"]] + (1.0 if self._scale is None else self._scale[s])
-        # The step in which the profile's end falls is the arrival step (t_arrive: t_end less
-        # the float error of k * dt, so that 14 steps of 0.1 s cover a 1.4 s segment).
-        elapsed = steps * dt
-        arrived = elapsed >= f[AT["t_arrive"]]
-        any_arrived = bool(np.count_nonzero(arrived))
-        u_new = trapezoid_progress(elapsed, f[PROFILE_AT], f[AT["u_t_end"]])
-        if any_arrived:
-            u_new[arrived] = 1.0
-        u_old = f[AT["u"]]
-        self.u[s] = u_new
-        self.steps[s] = steps
-        # Positions as (3, slots), read and written through the rows' flat indices.
-        position = store.position.reshape(-1)
-        pos = f[AT["p0"]] + f[AT["dp"]] * u_new
-        if any_arrived:
-            pos[:, arrived] = f[AT["p1"]][:, arrived]
-        store.velocity.reshape(-1)[flat] = (pos - position[flat]) / dt
-        position[flat] = pos
-        # Orientation work only for segments that rotate (pure translations keep theirs).
-        theta = f[AT["theta"]]
-        turning = theta > 0.0
-        if not np.count_nonzero(turning):
-            store.angular_velocity.reshape(-1)[flat] = 0.0
-        else:
-            t = turning.nonzero()[0]
-            ft, un = self._turn_block.take(s[t], axis=1), u_new[t]
-            quat = quat_slerp_batch(
-                ft[AT["q0"]].T,
-                ft[AT["q1"]].T,
-                un,
-                ft[AT["sl_dot"]],
-                ft[AT["sl_theta"]],
-                ft[AT["sl_sin"]],
-            )
-            done = arrived[t]
-            if np.count_nonzero(done):
-                quat[done] = ft[AT["q_goal"]].T[done]
-            if len(t) < len(rows):
-                store.angular_velocity[rows] = 0.0
-            r = rows[t]
-            store.orientation[r] = quat
-            rate = (un - u_old[t]) * theta[t] / dt
-            store.angular_velocity[r] = ft[AT["axis"]].T * rate[:, None]
-        store.mark_moved(rows)
-        if any_arrived:
-            for slot in s[arrived].tolist():
-                if self.mode[slot] == POSE and self._plans[slot] is not None:
-                    self._plan_next(slot)
+    def _arrived(self, slots: np.ndarray) -> None:
+        for slot in slots.tolist():
+            if self.mode[slot] == POSE and self._plans[slot] is not None:
+                self._plan_next(slot)
 
     def _advance_velocity(self, s: np.ndarray, dt: float) -> None:
         limits = (self.vmax[s], self.amax[s], self.wmax[s], self.alpha[s])
