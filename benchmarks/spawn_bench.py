@@ -6,10 +6,15 @@ an implementation defers to the step is counted. fleet_async creates the PyBulle
 such a loop only when something needs them (raw PyBullet access, a recording, physics...),
 all in batches; ``+bodies`` is that creation, forced by reading ``sim.client`` afterwards.
 With ``--incumbent VENV`` the same script runs on pybullet-fleet in that venv, interleaved with
-fleet_async run by run, and the report shows both and the ratio.
+fleet_async run by run, and the report shows both and the ratio. Figures are medians of wall
+time and of the process's CPU time (steadier on a shared machine); the ratio is on CPU time.
+
+``--urdf PATH`` (a file or a model name such as ``husky`` or ``mobile_manipulator``) spawns a
+fleet of that one URDF (``--kind urdf``): fleet_async loads the model once and later robots wait
+for their bodies (``world/urdf_models.py``); ``+bodies`` is the time to load them all.
 
 Run:  python benchmarks/spawn_bench.py [--n 1000 10000 100000] [--kind mesh|urdf|loaded]
-          [--repeat 3] [--incumbent /tmp/pbf] [--json]
+          [--urdf husky] [--spacing 2.0] [--repeat 3] [--incumbent /tmp/pbf] [--json]
 """
 
 from __future__ import annotations
@@ -27,13 +32,17 @@ HERE = Path(__file__).resolve().parent
 WORKLOADS = HERE / "seed_api_workloads.py"
 
 
-def run_one(python: str, package: str, n: int, kind: str, model: str) -> dict[str, Any]:
+def run_one(
+    python: str, package: str, n: int, kind: str, model: str, spacing: float | None
+) -> dict[str, Any]:
     """Run one spawn measurement in a fresh process; return its JSON result."""
     env = dict(os.environ)
     if package == "fleet_async":
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(HERE.parent), env.get("PYTHONPATH")]))
     cmd = [python, str(WORKLOADS), "--package", package, "spawn", str(n), "--kind", kind]
     cmd += ["--model", model]
+    if spacing is not None:
+        cmd += ["--spacing", str(spacing)]
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True, cwd=HERE)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -48,41 +57,59 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="URDF for --kind urdf (default: fleet_async's mobile_robot.urdf, for both sides)",
     )
+    parser.add_argument("--urdf", metavar="PATH", help="same as --kind urdf --model PATH")
+    parser.add_argument("--spacing", type=float, help="grid spacing, m (1 mesh, 2 others)")
     parser.add_argument("--repeat", type=int, default=3, help="runs per size and side (median)")
     parser.add_argument("--incumbent", metavar="VENV", help="pybullet-fleet venv to compare with")
     parser.add_argument("--json", action="store_true", help="one JSON object per size")
     args = parser.parse_args(argv)
+    if args.urdf:
+        args.kind, args.model = "urdf", args.urdf
     model = args.model or str(HERE.parent / "fleet_async" / "data" / "robots" / "mobile_robot.urdf")
+    if args.kind == "urdf" and not Path(model).is_file():  # a model name: both sides get a file
+        sys.path.insert(0, str(HERE.parent))
+        from fleet_async.core.bodies.models import resolve_model
+
+        model = resolve_model(model)
     incumbent = None if args.incumbent is None else str(Path(args.incumbent) / "bin" / "python")
     for n in args.n:
-        ours: list[float] = []
-        bodies: list[float] = []
-        theirs: list[float] = []
+        ours: list[dict[str, Any]] = []
+        theirs: list[dict[str, Any]] = []
         for _ in range(args.repeat):  # interleaved, so both sides see the same machine
-            mine = run_one(sys.executable, "fleet_async", n, args.kind, model)
-            ours.append(mine["spawn_s"])
-            bodies.append(mine["bodies_s"])
+            ours.append(run_one(sys.executable, "fleet_async", n, args.kind, model, args.spacing))
             if incumbent is not None:
-                theirs.append(run_one(incumbent, "pybullet_fleet", n, args.kind, model)["spawn_s"])
+                theirs.append(
+                    run_one(incumbent, "pybullet_fleet", n, args.kind, model, args.spacing)
+                )
         row: dict[str, Any] = {
             "n": n,
             "kind": args.kind,
-            "fleet_async_s": ours,
-            "fleet_async_bodies_s": bodies,
+            "model": model if args.kind == "urdf" else None,
+            "spacing_m": ours[0]["spacing_m"],
+            "load_average": os.getloadavg()[0],
         }
+        for name, runs in (("fleet_async", ours), ("incumbent", theirs)):
+            for field in ("spawn_s", "spawn_cpu_s", "bodies_s", "bodies_cpu_s"):
+                if runs:
+                    row[f"{name}_{field}"] = [r[field] for r in runs]
+        med = {k: statistics.median(v) for k, v in row.items() if isinstance(v, list)}
         if theirs:
-            row["incumbent_s"] = theirs
-            row["speedup_median"] = statistics.median(theirs) / statistics.median(ours)
+            row["speedup_cpu_median"] = (
+                med["incumbent_spawn_cpu_s"] / med["fleet_async_spawn_cpu_s"]
+            )
         if args.json:
             print(json.dumps(row), flush=True)
             continue
-        text = f"N={n:>7} {args.kind}: fleet_async {statistics.median(ours):7.3f} s"
-        text += f" (runs {', '.join(f'{t:.3f}' for t in ours)};"
-        text += f" +bodies {statistics.median(bodies):.3f} s)"
+        what = f"{args.kind} {Path(model).name}" if args.kind == "urdf" else args.kind
+        text = f"N={n:>7} {what} ({row['spacing_m']:g} m apart, load {row['load_average']:.1f}):"
+        text += f" fleet_async {med['fleet_async_spawn_s']:.3f} s"
+        text += f" (CPU {med['fleet_async_spawn_cpu_s']:.3f} s;"
+        text += f" +bodies {med['fleet_async_bodies_s']:.3f} s, CPU"
+        text += f" {med['fleet_async_bodies_cpu_s']:.3f} s)"
         if theirs:
-            text += f"  incumbent {statistics.median(theirs):7.3f} s"
-            text += f" (runs {', '.join(f'{t:.3f}' for t in theirs)})"
-            text += f"  speed-up {row['speedup_median']:.1f}x"
+            text += f"  incumbent {med['incumbent_spawn_s']:.3f} s"
+            text += f" (CPU {med['incumbent_spawn_cpu_s']:.3f} s)"
+            text += f"  speed-up (CPU) {row['speedup_cpu_median']:.1f}x"
         print(text, flush=True)
     return 0
 
