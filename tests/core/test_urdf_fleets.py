@@ -148,10 +148,16 @@ def test_a_fleet_of_one_model_loads_it_once_until_pybullet_is_needed(monkeypatch
         assert len(loads) == 1
         assert p.getNumBodies(physicsClientId=sim.world.client) == 1
         assert sim.step_count == 40
-        body = robots[7].body_id  # raw access: every body is loaded, where its robot is now
-        assert len(loads) == 20
-        pos, _ = p.getBasePositionAndOrientation(body, physicsClientId=sim.client)
+        body = robots[7].body_id  # raw access to one robot: its body is loaded, where it is
+        assert len(loads) == 2
+        assert robots[8].raw_body_id == PENDING_BODY
+        pos, _ = p.getBasePositionAndOrientation(body, physicsClientId=sim.world.client)
         assert pos == tuple(robots[7].get_pose().position)
+        assert robots[3].joint_names == robots[0].joint_names  # joints need the body
+        assert len(loads) == 3
+        client = sim.client  # raw access to the simulation: every body is loaded
+        assert len(loads) == 20
+        assert p.getNumBodies(physicsClientId=client) == 20
     finally:
         sim.close()
 
@@ -166,7 +172,9 @@ def test_waiting_robots_that_touch_are_reported_as_loaded_ones_are():
             if not defer:  # every body loaded before the collision system sees them
                 sim.sync_pybullet()
             sim.step_once()
-            assert c.raw_body_id != PENDING_BODY  # the pair a-b needed PyBullet: all loaded
+            # The pair a-b needed PyBullet's view: their bodies are loaded, not c's.
+            assert b.raw_body_id != PENDING_BODY
+            assert (c.raw_body_id == PENDING_BODY) == defer
             return [(a.object_id, b.object_id)] if sim.get_active_collision_pairs() else []
         finally:
             sim.close()

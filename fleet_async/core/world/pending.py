@@ -272,6 +272,23 @@ class PendingBodiesApi:
         if self._pending.create_all(self._store, self._backend.client, one_by_one=one_by_one):
             self._body_list_stale = True
 
+    def create_pending_bodies_for(
+        self, rows: Sequence[int] | np.ndarray, for_raw_access: bool = False
+    ) -> None:
+        """Create the bodies ``rows`` wait for: a URDF robot's alone (URDF bodies are loaded
+        one at a time anyway, so its fleet keeps waiting), and every pending body if one of
+        ``rows`` waits for a body made from shapes (in batches: ``create_pending_bodies``)."""
+        pending = self._pending
+        shaped = False
+        for row in np.asarray(rows, dtype=np.int64).tolist():
+            group = pending.group(row)
+            if isinstance(group, UrdfKey):
+                pending.create_one(row, self._store, self._backend.client)
+            elif group is not None:
+                shaped = True
+        if shaped:
+            self.create_pending_bodies(for_raw_access)
+
     def create_pending_body(self, row: int) -> None:
         """Create the pending body of ``row`` alone (the others stay pending)."""
         self._pending.create_one(row, self._store, self._backend.client)
