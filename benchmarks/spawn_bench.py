@@ -44,7 +44,9 @@ def run_one(
     if spacing is not None:
         cmd += ["--spacing", str(spacing)]
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True, cwd=HERE)
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    # PyBullet's C-level warnings (husky's links without inertia) share stdout, unterminated.
+    last = out.stdout.strip().splitlines()[-1]
+    return json.loads(last[last.index("{") :])
 
 
 def main(argv: list[str] | None = None) -> int:
