@@ -163,20 +163,25 @@ class CollisionGeometry:
             for row, b in zip(rows.tolist(), bodies, strict=True)
         ]
         by_shape: dict[int, list[int]] = {}
+        by_model: dict[object, list[int]] = {}
         for row, body, shape in zip(rows.tolist(), bodies, shapes, strict=True):
             if shape >= 0:
                 by_shape.setdefault(shape, []).append(row)
-            elif body == PENDING_BODY and (frame := world.pending_urdf_frame(row)) is not None:
-                # A URDF robot waiting for its body: its model's box, joints at rest.
-                self.articulated[row] = True
-                self.shape[row] = -1
-                self.box[row] = False
-                self._set_frame(row, *frame)
+            elif body == PENDING_BODY and world.pending_urdf_frame(row) is not None:
+                by_model.setdefault(world.pending_group(row), []).append(row)
             else:
                 if body == PENDING_BODY:  # a pending body without a collision shape
                     world.create_pending_body(row)
                     body = int(store.body_id[row])
                 self._register_one(row, body, store, client)
+        for members in by_model.values():  # URDF robots waiting for their bodies
+            r = np.array(members, dtype=np.int64)
+            frame = world.pending_urdf_frame(members[0])
+            assert frame is not None  # grouped by it above
+            self.articulated[r] = True  # their model's box (joints at rest) until then
+            self.shape[r] = -1
+            self.box[r] = False
+            self._set_frame(r, *frame)
         for shape, members in by_shape.items():
             info = self._shapes.get(shape)
             if info is None:

@@ -14,6 +14,7 @@ PyBullet's view of it. Those bodies are what ``loadURDF`` makes, so everything r
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -62,21 +63,31 @@ class UrdfModel:
     ) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """The base pose PyBullet reports for a body ``loadURDF`` puts at this URDF link-frame
         pose: the same float operations, so the same numbers (see :func:`_bullet_matrix`)."""
-        rot = _bullet_matrix(orientation)
+        rot, quat = _base_rotation(tuple(float(v) for v in orientation), self.inertial_orientation)
         ip = self.inertial_position
         pos = tuple(
             float(position[i]) + (rot[i][0] * ip[0] + rot[i][1] * ip[1] + rot[i][2] * ip[2])
             for i in range(3)
         )
-        if self.inertial_orientation != (0.0, 0.0, 0.0, 1.0):
-            inertial = _bullet_matrix(self.inertial_orientation)
-            rot = [
-                [_dot(rot[i], (inertial[0][j], inertial[1][j], inertial[2][j])) for j in range(3)]
-                for i in range(3)
-            ]
-        # PyBullet turns the matrix into its base quaternion and, when asked for the pose,
-        # that quaternion into a matrix and back again.
-        return pos, _bullet_quaternion(_bullet_matrix(_bullet_quaternion(rot)))
+        return pos, quat
+
+
+@functools.lru_cache(maxsize=1024)  # a fleet is mostly spawned at a few orientations
+def _base_rotation(
+    orientation: tuple[float, ...], inertial: tuple[float, ...]
+) -> tuple[list[list[float]], tuple[float, float, float, float]]:
+    """The link frame's rotation matrix and the base quaternion PyBullet reports."""
+    rot = _bullet_matrix(orientation)
+    base = rot
+    if inertial != (0.0, 0.0, 0.0, 1.0):
+        frame = _bullet_matrix(inertial)
+        base = [
+            [_dot(rot[i], (frame[0][j], frame[1][j], frame[2][j])) for j in range(3)]
+            for i in range(3)
+        ]
+    # PyBullet turns the matrix into its base quaternion and, when asked for the pose,
+    # that quaternion into a matrix and back again.
+    return rot, _bullet_quaternion(_bullet_matrix(_bullet_quaternion(base)))
 
 
 def _dot(row: Sequence[float], col: Sequence[float]) -> float:
