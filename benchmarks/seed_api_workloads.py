@@ -14,14 +14,16 @@ Workloads:
   checks every step (CLOSEST_POINTS, margin 0.02 m); 10 warm-up steps, then 100 timed
   ``step_once()`` calls. The same workload as ``fleet_async.bench``.
 - ``spawn N``: a plain loop of ``Agent.from_mesh`` (the benchmark's cube) or ``Agent.from_urdf``
-  (a shared model) with ``sim_core=sim``, as users write it (``--kind loaded``: each robot
+  (a shared model, ``mass=0.0``) with ``sim_core=sim``, as users write it, on a ceil(sqrt(N))
+  grid (``--spacing``: 1 m for the cube, 2 m otherwise, so that robots such as husky, 1 m
+  long, do not overlap) (``--kind loaded``: each robot
   ``Agent.from_params`` with an omni + patrol controller and a battery, then a tote of the same
   box shape ``SimObject.from_mesh`` and ``robot.attach_object(tote)``: the loop that went
   quadratic), timed up to the end of the first
   ``step_once()`` so that work an implementation defers to the step is counted (``spawn_s``);
   then ``sim.client`` is read, as raw PyBullet calls do, and its time reported apart
-  (``bodies_s``): fleet_async creates the PyBullet bodies a kinematic fleet never needed
-  then, pybullet-fleet has nothing left to do.
+  (``bodies_s``; ``*_cpu_s``: the process's CPU time): fleet_async creates the PyBullet
+  bodies a kinematic fleet never needed then, pybullet-fleet has nothing left to do.
 
 - ``realistic N``: the realistic fleet in seed-API terms (what both packages have of
   ``fleet-async bench --realistic``): N robots (box, omni, 1.5 m/s) on a grid 4 m apart, each
@@ -129,11 +131,14 @@ def fleet(m: dict[str, Any], n: int) -> dict[str, Any]:
     }
 
 
-def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
-    """Wall time of a per-agent spawning loop, up to the end of the first step."""
+def spawn(
+    m: dict[str, Any], n: int, kind: str, model: str, spacing: float | None = None
+) -> dict[str, Any]:
+    """Wall and CPU time of a per-agent spawning loop, up to the end of the first step."""
     agent_cls, pose_cls = m["agent"].Agent, m["geometry"].Pose
     sim = _sim(m)
     side = math.ceil(math.sqrt(n))
+    gap = spacing if spacing is not None else (1.0 if kind == "mesh" else 2.0)
     cube = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.05, 0.05, 0.05])
     controller = {"type": "omni", "max_linear_vel": 2.0, "max_angular_vel": 3.0}
     gc.collect()
@@ -142,7 +147,7 @@ def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
         body = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.3, 0.2, 0.1])
         tote = m["sim_object"].ShapeParams(shape_type="box", half_extents=[0.3, 0.2, 0.1])
         for i in range(n):
-            x, y = 2.0 * (i % side), 2.0 * (i // side)
+            x, y = gap * (i % side), gap * (i // side)
             robot = m["agent"].Agent.from_params(
                 m["agent"].AgentSpawnParams(
                     visual_shape=body,
@@ -170,7 +175,7 @@ def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
             agent_cls.from_mesh(
                 visual_shape=cube,
                 collision_shape=cube,
-                pose=pose_cls.from_xyz(float(i % side), float(i // side), 0.1),
+                pose=pose_cls.from_xyz(gap * (i % side), gap * (i // side), 0.1),
                 mass=0.0,
                 sim_core=sim,
                 controller=controller,
@@ -179,7 +184,7 @@ def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
         for i in range(n):
             agent_cls.from_urdf(
                 urdf_path=model,
-                pose=pose_cls.from_xyz(float(i % side), float(i // side), 0.1),
+                pose=pose_cls.from_xyz(gap * (i % side), gap * (i // side), 0.1),
                 mass=0.0,
                 sim_core=sim,
                 controller=controller,
@@ -188,18 +193,20 @@ def spawn(m: dict[str, Any], n: int, kind: str, model: str) -> dict[str, Any]:
     sim.step_once()
     total_s, total_cpu_s = time.perf_counter() - t0, time.process_time() - c0
     # Raw PyBullet access: fleet_async creates the bodies it had no need for until now.
-    t1 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
     p_client = sim.client
-    bodies_s = time.perf_counter() - t1
+    bodies_s, bodies_cpu_s = time.perf_counter() - t1, time.process_time() - c1
     del p_client
     _close(sim)
     return {
         "workload": f"spawn_{kind}",
         "n": n,
         "loop_s": loop_s,
+        "spacing_m": gap,
         "spawn_s": total_s,
         "spawn_cpu_s": total_cpu_s,
         "bodies_s": bodies_s,
+        "bodies_cpu_s": bodies_cpu_s,
     }
 
 
@@ -299,6 +306,9 @@ def main(argv: list[str] | None = None) -> int:
     spawn_p.add_argument("n", type=int)
     spawn_p.add_argument("--kind", choices=("mesh", "urdf", "loaded"), default="mesh")
     spawn_p.add_argument("--model", default="mobile_robot", help="URDF model for --kind urdf")
+    spawn_p.add_argument(
+        "--spacing", type=float, default=None, help="grid spacing, m (default 1 mesh, 2 others)"
+    )
     real_p = sub.add_parser("realistic", help="the realistic fleet in seed-API terms")
     real_p.add_argument("n", type=int)
     real_p.add_argument("--steps", type=int, default=200, help="timed steps (default 200)")
@@ -309,7 +319,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.workload == "realistic":
         result = realistic(m, args.n, args.steps)
     else:
-        result = spawn(m, args.n, args.kind, args.model)
+        result = spawn(m, args.n, args.kind, args.model, args.spacing)
     result["package"] = args.package
     print(json.dumps(result), flush=True)
     return 0

@@ -6,10 +6,15 @@ an implementation defers to the step is counted. fleet_async creates the PyBulle
 such a loop only when something needs them (raw PyBullet access, a recording, physics...),
 all in batches; ``+bodies`` is that creation, forced by reading ``sim.client`` afterwards.
 With ``--incumbent VENV`` the same script runs on pybullet-fleet in that venv, interleaved with
-fleet_async run by run, and the report shows both and the ratio.
+fleet_async run by run, and the report shows both and the ratio. Figures are medians of wall
+time and of the process's CPU time (steadier on a shared machine); the ratio is on CPU time.
+
+``--urdf PATH`` (a file or a model name such as ``husky`` or ``mobile_manipulator``) spawns a
+fleet of that one URDF (``--kind urdf``): fleet_async loads the model once and later robots wait
+for their bodies (``world/urdf_models.py``); ``+bodies`` is the time to load them all.
 
 Run:  python benchmarks/spawn_bench.py [--n 1000 10000 100000] [--kind mesh|urdf|loaded]
-          [--repeat 3] [--incumbent /tmp/pbf] [--json]
+          [--urdf husky] [--spacing 2.0] [--repeat 3] [--incumbent /tmp/pbf] [--json]
 """
 
 from __future__ import annotations
@@ -27,15 +32,21 @@ HERE = Path(__file__).resolve().parent
 WORKLOADS = HERE / "seed_api_workloads.py"
 
 
-def run_one(python: str, package: str, n: int, kind: str, model: str) -> dict[str, Any]:
+def run_one(
+    python: str, package: str, n: int, kind: str, model: str, spacing: float | None
+) -> dict[str, Any]:
     """Run one spawn measurement in a fresh process; return its JSON result."""
     env = dict(os.environ)
     if package == "fleet_async":
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(HERE.parent), env.get("PYTHONPATH")]))
     cmd = [python, str(WORKLOADS), "--package", package, "spawn", str(n), "--kind", kind]
     cmd += ["--model", model]
+    if spacing is not None:
+        cmd += ["--spacing", str(spacing)]
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True, cwd=HERE)
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    # PyBullet's C-level warnings (husky's links without inertia) share stdout, unterminated.
+    last = out.stdout.strip().splitlines()[-1]
+    return json.loads(last[last.index("{") :])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -48,56 +59,74 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="URDF for --kind urdf (default: fleet_async's mobile_robot.urdf, for both sides)",
     )
+    parser.add_argument("--urdf", metavar="PATH", help="same as --kind urdf --model PATH")
+    parser.add_argument("--spacing", type=float, help="grid spacing, m (1 mesh, 2 others)")
     parser.add_argument("--repeat", type=int, default=3, help="runs per size and side (median)")
     parser.add_argument("--incumbent", metavar="VENV", help="pybullet-fleet venv to compare with")
     parser.add_argument("--json", action="store_true", help="one JSON object per size")
     args = parser.parse_args(argv)
+    if args.urdf:
+        args.kind, args.model = "urdf", args.urdf
     model = args.model or str(HERE.parent / "fleet_async" / "data" / "robots" / "mobile_robot.urdf")
+    if args.kind == "urdf" and not Path(model).is_file():  # a model name: both sides get a file
+        sys.path.insert(0, str(HERE.parent))
+        from fleet_async.core.bodies.models import resolve_model
+
+        model = resolve_model(model)
     incumbent = None if args.incumbent is None else str(Path(args.incumbent) / "bin" / "python")
     for n in args.n:
         ours: list[dict[str, Any]] = []
         theirs: list[dict[str, Any]] = []
         for _ in range(args.repeat):  # interleaved, so both sides see the same machine
-            ours.append(run_one(sys.executable, "fleet_async", n, args.kind, model))
+            ours.append(run_one(sys.executable, "fleet_async", n, args.kind, model, args.spacing))
             if incumbent is not None:
-                theirs.append(run_one(incumbent, "pybullet_fleet", n, args.kind, model))
+                theirs.append(
+                    run_one(incumbent, "pybullet_fleet", n, args.kind, model, args.spacing)
+                )
         row: dict[str, Any] = {
             "n": n,
             "kind": args.kind,
-            "fleet_async_s": [r["spawn_s"] for r in ours],
-            "fleet_async_cpu_s": [r["spawn_cpu_s"] for r in ours],
-            "fleet_async_bodies_s": [r["bodies_s"] for r in ours],
+            "model": model if args.kind == "urdf" else None,
+            "spacing_m": ours[0]["spacing_m"],
+            "load_average": os.getloadavg()[0],
         }
+        for name, runs in (("fleet_async", ours), ("incumbent", theirs)):
+            for field in ("spawn_s", "spawn_cpu_s", "bodies_s", "bodies_cpu_s"):
+                if runs:
+                    row[f"{name}_{field}"] = [r[field] for r in runs]
+        med = {k: statistics.median(v) for k, v in row.items() if isinstance(v, list)}
         if theirs:
-            row["incumbent_s"] = [r["spawn_s"] for r in theirs]
-            row["incumbent_cpu_s"] = [r["spawn_cpu_s"] for r in theirs]
-            for key in ("s", "cpu_s"):
+            for key in ("spawn_s", "spawn_cpu_s"):
                 mine, other = row[f"fleet_async_{key}"], row[f"incumbent_{key}"]
-                row[f"speedup_median_{key}"] = statistics.median(other) / statistics.median(mine)
+                row[f"speedup_median_{key}"] = med[f"incumbent_{key}"] / med[f"fleet_async_{key}"]
                 row[f"speedup_pairs_{key}"] = statistics.median(
                     t / o for o, t in zip(mine, other, strict=True)
                 )
-            row["speedup_median"] = row["speedup_median_s"]
         if args.json:
             print(json.dumps(row), flush=True)
             continue
-        print(_report(row, theirs != []), flush=True)
+        print(_report(row, Path(model).name if args.kind == "urdf" else ""), flush=True)
     return 0
 
 
-def _report(row: dict[str, Any], incumbent: bool) -> str:
+def _report(row: dict[str, Any], model: str) -> str:
     def runs(key: str) -> str:
         values = row[key]
         return f"{statistics.median(values):7.3f} s (runs {', '.join(f'{t:.3f}' for t in values)})"
 
-    text = f"N={row['n']:>7} {row['kind']}: fleet_async {runs('fleet_async_s')}, CPU"
-    text += f" {runs('fleet_async_cpu_s')}; +bodies"
-    text += f" {statistics.median(row['fleet_async_bodies_s']):.3f} s"
-    if incumbent:
-        text += f"\n          incumbent {runs('incumbent_s')}, CPU {runs('incumbent_cpu_s')}"
-        text += f"\n          speed-up: wall {row['speedup_median_s']:.1f}x of the medians,"
-        text += f" {row['speedup_pairs_s']:.1f}x per pair; CPU {row['speedup_median_cpu_s']:.1f}x"
-        text += f" of the medians, {row['speedup_pairs_cpu_s']:.1f}x per pair"
+    what = f"{row['kind']} {model}".strip()
+    text = f"N={row['n']:>7} {what} ({row['spacing_m']:g} m apart, load"
+    text += f" {row['load_average']:.1f}): fleet_async {runs('fleet_async_spawn_s')}, CPU"
+    text += f" {runs('fleet_async_spawn_cpu_s')}; +bodies"
+    text += f" {statistics.median(row['fleet_async_bodies_s']):.3f} s, CPU"
+    text += f" {statistics.median(row['fleet_async_bodies_cpu_s']):.3f} s"
+    if "incumbent_spawn_s" in row:
+        text += f"\n          incumbent {runs('incumbent_spawn_s')}, CPU"
+        text += f" {runs('incumbent_spawn_cpu_s')}"
+        text += f"\n          speed-up: wall {row['speedup_median_spawn_s']:.1f}x of the medians,"
+        text += f" {row['speedup_pairs_spawn_s']:.1f}x per pair; CPU"
+        text += f" {row['speedup_median_spawn_cpu_s']:.1f}x of the medians,"
+        text += f" {row['speedup_pairs_spawn_cpu_s']:.1f}x per pair"
     return text
 
 

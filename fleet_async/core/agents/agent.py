@@ -13,8 +13,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
-import pybullet as p
-
 from fleet_async.core.actions.action import Action
 from fleet_async.core.agents.agent_joints import AgentJointsApi
 from fleet_async.core.agents.agent_motion import AgentMotionApi
@@ -25,29 +23,18 @@ from fleet_async.core.base.types import CollisionMode, MotionMode, coerce_enum
 from fleet_async.core.bodies.models import resolve_model
 from fleet_async.core.bodies.sim_object import SimObject
 from fleet_async.core.bodies.spawning import construct, reserve_bodies, reserve_body, wrap_all
+from fleet_async.core.bodies.urdf_spawn import reserve_urdf_body
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.missions.agent_missions import AgentMissionApi
 from fleet_async.core.motion.chain import build_controller_chain
 from fleet_async.core.motion.controllers import Controller
 from fleet_async.core.motion.ik import IKParams
 from fleet_async.core.motion.joints import JointSet, check_tolerance_spec
-from fleet_async.core.world.link_colours import one_colour_per_link
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.host import AgentHost
 
 __all__ = ["Agent", "AgentSpawnParams", "IKParams"]
-
-
-def _construct_or_remove_body(
-    cls: type[Agent], sim_core: AgentHost | None, body: int, **kwargs: Any
-) -> Agent:
-    """Build the agent around a body this module created; remove the body if that fails."""
-    try:
-        return cls(body, sim_core=sim_core, **kwargs)
-    except Exception:
-        p.removeBody(body, physicsClientId=0 if sim_core is None else sim_core.client)
-        raise
 
 
 def _mesh_kwargs(spawn_params: AgentSpawnParams) -> dict[str, Any]:
@@ -199,8 +186,8 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
         """Spawn many agents fast: shape-based bodies are left pending or created in batches
         (as ``from_params`` would).
 
-        URDF agents are loaded one by one. Input order is kept; if anything fails, nothing
-        this call created is left behind.
+        URDF agents are spawned one by one (``from_urdf``). Input order is kept; if anything
+        fails, nothing this call created is left behind.
         """
         params_list = list(params_list)
         shaped = [i for i, prm in enumerate(params_list) if prm.kind != "urdf"]
@@ -271,48 +258,32 @@ class Agent(AgentMissionApi, AgentJointsApi, AgentMotionApi, SimObject):
     ) -> Agent:
         """Load a URDF (a path or a model name such as "mobile_robot" or "panda").
 
-        ``mass=None`` keeps the URDF's masses; ``mass=0.0`` makes every link kinematic.
+        ``mass=None`` keeps the URDF's masses; ``mass=0.0`` makes every link kinematic. On a
+        headless simulation, a robot of a model the simulation loaded before whose body is
+        kinematic (physics off or ``mass=0.0``) waits for its body: the model is not loaded
+        again until something needs PyBullet's view (``bodies/urdf_spawn.py``).
 
         Raises:
             ValueError: for an unknown model name, naming the known ones.
         """
         path = resolve_model(urdf_path)
         pose = pose if pose is not None else Pose([0.0, 0.0, 0.0])
-        client = 0 if sim_core is None else sim_core.client
-        pos, orn = pose.as_position_orientation()
-        try:
-            # Cached graphics shapes: loading one model many times re-uses its visual
-            # shapes instead of parsing them again (half the cost of each load).
-            body = p.loadURDF(
-                path,
-                pos,
-                orn,
-                useFixedBase=bool(use_fixed_base),
-                flags=p.URDF_ENABLE_CACHED_GRAPHICS_SHAPES,
-                physicsClientId=client,
-            )
-        except p.error as exc:
-            raise ValueError(f"urdf_path {path!r}: PyBullet could not load it ({exc})") from exc
-        one_colour_per_link(client, body, path)  # the GUI and recordings show it alike
-        if mass == 0.0:
-            for link in range(-1, p.getNumJoints(body, physicsClientId=client)):
-                p.changeDynamics(body, link, mass=0.0, physicsClientId=client)
-        return _construct_or_remove_body(
-            cls,
-            sim_core,
-            body,
-            urdf_path=path,
-            motion_mode=motion_mode,
-            use_fixed_base=use_fixed_base,
-            collision_mode=collision_mode,
-            name=name,
-            user_data=user_data,
-            mass=mass,
-            ik_params=ik_params,
-            joint_tolerance=joint_tolerance,
-            controller=controller,
-            notify_spawn=notify_spawn,
-        )
+        body, deferred, urdf_mass = reserve_urdf_body(path, pose, use_fixed_base, mass, sim_core)
+        kwargs: dict[str, Any] = {
+            "urdf_path": path,
+            "motion_mode": motion_mode,
+            "use_fixed_base": use_fixed_base,
+            "collision_mode": collision_mode,
+            "name": name,
+            "user_data": user_data,
+            # A pending body has no masses to read yet: the model's, which it will have.
+            "mass": urdf_mass if mass is None else mass,
+            "ik_params": ik_params,
+            "joint_tolerance": joint_tolerance,
+            "controller": controller,
+            "notify_spawn": notify_spawn,
+        }
+        return construct(lambda b: cls(b, sim_core=sim_core, **kwargs), body, deferred, sim_core)
 
     # ----- actions ------------------------------------------------------------------------
 

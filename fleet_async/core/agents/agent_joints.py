@@ -76,17 +76,19 @@ class AgentJointsApi:
             sim = self.sim_core
             if not self.is_urdf_robot() or sim is None:
                 raise ValueError(f"{self!r} has no joints (not a URDF robot in a simulation)")
+            # This robot's body only (sim.client would load every robot still waiting).
+            body, client = self.body_id, sim.world.client
             infos = read_joint_infos(
-                self.body_id,
-                sim.client,
+                body,
+                client,
                 self._KINEMATIC_JOINT_FALLBACK_VELOCITY,
                 self._KINEMATIC_PRISMATIC_FALLBACK_VELOCITY,
             )
             # Massless robots (mass=0 at spawn) and every robot without physics are kinematic.
             kinematic = not sim.params.physics or all(
-                sim.body_mass(self.body_id, link) == 0.0 for link in range(-1, len(infos))
+                sim.body_mass(body, link) == 0.0 for link in range(-1, len(infos))
             )
-            self._joint_set = JointSet(self.body_id, sim.client, kinematic, infos, repr(self))
+            self._joint_set = JointSet(body, client, kinematic, infos, repr(self))
         return self._joint_set
 
     def get_num_joints(self) -> int:

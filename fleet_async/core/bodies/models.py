@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import difflib
 import functools
+import os
 from pathlib import Path as FsPath
 
 import pybullet_data
@@ -109,11 +110,12 @@ def _model_key(name_or_path: str) -> str:
     return name_or_path
 
 
-def _find_under(relative: FsPath, search_paths: list[str]) -> str | None:
+def _find_under(relative: str, search_paths: list[str]) -> str | None:
+    # os.path, not pathlib: a spawn loop resolves its model once per robot.
     for base in search_paths:
-        candidate = FsPath(base) / relative
-        if candidate.is_file():
-            return str(candidate.resolve())
+        candidate = os.path.join(base, relative)
+        if os.path.isfile(candidate):
+            return os.path.realpath(candidate)
     return None
 
 
@@ -133,21 +135,22 @@ def resolve_model(name_or_path: str) -> str:
         ValueError: if nothing matches; the message names the closest known model, every
             known model (sorted) and the search paths tried (in search order).
     """
-    as_path = FsPath(name_or_path).expanduser()
-    if name_or_path and as_path.is_file():
-        return str(as_path.resolve())
+    expanded = os.path.expanduser(name_or_path)
+    if name_or_path and os.path.isfile(expanded):
+        return os.path.realpath(expanded)
     search_paths = list_model_search_paths()
-    if name_or_path and not as_path.is_absolute():
-        found = _find_under(as_path, search_paths)
+    relative = bool(name_or_path) and not os.path.isabs(expanded)
+    if relative:
+        found = _find_under(expanded, search_paths)
         if found is not None:
             return found
     known = _known_models()
     key = _model_key(name_or_path)
     if key in known:
         return known[key]
-    if name_or_path and not as_path.is_absolute() and not as_path.suffix:
+    if relative and not os.path.splitext(expanded)[1]:
         for suffix in _MODEL_SUFFIXES:
-            found = _find_under(as_path.with_suffix(suffix), search_paths)
+            found = _find_under(expanded + suffix, search_paths)
             if found is not None:
                 return found
     raise ValueError(_unknown_model_message(name_or_path, key, sorted(known), search_paths))

@@ -115,13 +115,14 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
     @property
     def body_id(self) -> int:
         """PyBullet body unique id (-1 for none), ready for raw ``pybullet`` calls: a body
-        still pending is created first, and PyBullet's client-side body list is brought up to
+        still pending is created first (with every pending body made from shapes; a URDF
+        robot's alone), and PyBullet's client-side body list is brought up to
         date if bodies were created in batches since (so ``getBodyInfo`` works)."""
         sim = self.sim_core
         if sim is not None:
             world = sim.world
             if self._body_id == PENDING_BODY:
-                world.create_pending_bodies(for_raw_access=True)
+                world.create_pending_bodies_for([self._row], for_raw_access=True)
             world.sync_body_list()
         return self._body_id
 
@@ -136,7 +137,7 @@ class SimObject(ObjectCallbacks, SimObjectConstructors):
         body list is not brought up to date (``getBodyInfo`` may not know the body yet).
         What the simulation itself uses, so that its own reads never cost a body-list sync."""
         if self._body_id == PENDING_BODY and self.sim_core is not None:
-            self.sim_core.world.create_pending_bodies()
+            self.sim_core.world.create_pending_bodies_for([self._row])
         return self._body_id
 
     @property

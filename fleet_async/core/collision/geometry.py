@@ -8,7 +8,8 @@ one PyBullet measurement, not 10,000. After that a row's world AABB is ``center 
 ``half = |R| h``, computed only for rows that moved (unrotated rows skip the rotation). STATIC
 rows keep the AABB they were registered with. Articulated bodies (URDF with joints) are the
 exception: their links move relative to the base, so their AABBs are read from PyBullet
-whenever they move.
+whenever they move; a URDF robot still waiting for its body (``world/urdf_models.py``) moves
+rigidly, bounded by its model's box, until the body exists.
 
 World AABBs are stored already padded by ``pad`` (half the closest-points margin) on every side,
 which is what the broad phase tests; :meth:`CollisionGeometry.unpadded` gives them back as
@@ -162,14 +163,25 @@ class CollisionGeometry:
             for row, b in zip(rows.tolist(), bodies, strict=True)
         ]
         by_shape: dict[int, list[int]] = {}
+        by_model: dict[object, list[int]] = {}
         for row, body, shape in zip(rows.tolist(), bodies, shapes, strict=True):
             if shape >= 0:
                 by_shape.setdefault(shape, []).append(row)
+            elif body == PENDING_BODY and world.pending_urdf_frame(row) is not None:
+                by_model.setdefault(world.pending_group(row), []).append(row)
             else:
                 if body == PENDING_BODY:  # a pending body without a collision shape
                     world.create_pending_body(row)
                     body = int(store.body_id[row])
                 self._register_one(row, body, store, client)
+        for members in by_model.values():  # URDF robots waiting for their bodies
+            r = np.array(members, dtype=np.int64)
+            frame = world.pending_urdf_frame(members[0])
+            assert frame is not None  # grouped by it above
+            self.articulated[r] = True  # their model's box (joints at rest) until then
+            self.shape[r] = -1
+            self.box[r] = False
+            self._set_frame(r, *frame)
         for shape, members in by_shape.items():
             info = self._shapes.get(shape)
             if info is None:
@@ -267,6 +279,10 @@ class CollisionGeometry:
                 if not len(rows):
                     return
         art = self.articulated[rows]
+        if np.count_nonzero(art):
+            # URDF robots still waiting for their bodies move rigidly (their joints cannot
+            # have moved): the model's box, like any single body's, below.
+            art &= store.body_id.take(rows) != PENDING_BODY
         if np.count_nonzero(art):
             client = self._client()
             self._sync_rows(rows[art])

@@ -39,7 +39,8 @@ class NarrowPhase:
         margin: Distance (m) at which CLOSEST_POINTS reports a pair.
         client: Returns the PyBullet client id (without creating pending bodies).
         sync_rows: Pushes the given rows' poses to PyBullet.
-        create_bodies: Creates every pending body (before a query that needs bodies).
+        create_bodies: Creates the bodies the given rows wait for (before a query that
+            needs bodies; ``World.create_pending_bodies_for``).
     """
 
     def __init__(
@@ -49,7 +50,7 @@ class NarrowPhase:
         margin: float,
         client: Callable[[], int],
         sync_rows: Callable[[np.ndarray], None],
-        create_bodies: Callable[[], None],
+        create_bodies: Callable[[np.ndarray], None],
     ) -> None:
         self._geo = geometry
         self.method = method
@@ -135,7 +136,7 @@ class NarrowPhase:
         client = self._client()
         if len(needs_body):
             if np.count_nonzero(store.body_id[needs_body] == PENDING_BODY):
-                self._create_bodies()
+                self._create_bodies(np.unique(needs_body))
             self._sync_rows(np.unique(needs_body))
         bodies = store.body_id[row_pairs[rest]].tolist()
         pos_l = pos[rest].tolist()

@@ -85,7 +85,12 @@ class CollisionSystem:
 
         self.geometry = CollisionGeometry(pad, client, on_sync, world)
         self.narrow = NarrowPhase(
-            self.geometry, self.method, self.margin, client, on_sync, world.create_pending_bodies
+            self.geometry,
+            self.method,
+            self.margin,
+            client,
+            on_sync,
+            world.create_pending_bodies_for,
         )
         self._active = ActivePairs()
         self._colors: dict[int, list[Any]] = {}

@@ -4,8 +4,8 @@ A footprint is the body-frame bounding box of every visual primitive of every li
 above (a circle for a lone sphere or upright cylinder), with its height range and the colour
 of the primitive that covers the most floor. Read from PyBullet's visual shape data once per
 body when the body enters a trace; identical single-link bodies share one measurement. A body
-still pending (``world/pending.py``) is described by its visual shape: the first of each shape
-is created alone to be measured, the others stay pending.
+still pending (``world/pending.py``) is described by its visual shape (a URDF robot by its
+model): the first of each is created alone to be measured, the others stay pending.
 """
 
 from __future__ import annotations
@@ -82,7 +82,10 @@ def describe_body(
     client = world.client
     pending_key: tuple[Any, ...] | None = None
     if body == PENDING_BODY:
-        pending_key = ("pending", world.pending_visual_shape(obj.state_row))
+        group = world.pending_group(obj.state_row)
+        # Shape bodies by their visual shape; URDF robots (joints at rest until their body
+        # exists) by their model.
+        pending_key = ("pending", getattr(group, "visual_shape", group))
         if pending_key in cache:
             return dict(cache[pending_key]), where
         world.create_pending_body(obj.state_row)  # this one alone, to measure its shape
