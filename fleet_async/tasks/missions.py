@@ -63,7 +63,7 @@ class Mission(SimEvent):
         self.key = key
         self._nursery = nursery
         self._children = 0
-        self._owned: list[Any] | None = None  # ActionWaits of the actions it queued
+        self._owned: dict[Any, None] | None = None  # ActionWaits of its unfinished actions
         self._kept: list[Any] | None = None  # requests it was interrupted from
         self.cancelled = False
         """Whether it ended by cancellation."""
@@ -82,14 +82,22 @@ class Mission(SimEvent):
     # ----- what it leaves behind ------------------------------------------------------------
 
     def own(self, wait: Any) -> None:
-        """An action it queued (an ActionWait): cancelled if unfinished when it ends."""
+        """An action it queued (an ActionWait): cancelled if unfinished when it ends (see
+        :meth:`disown`)."""
         owned = self._owned
         if owned is None:
-            self._owned = [wait]
-            return
-        if len(owned) >= 32:  # a long-lived mission: forget the finished ones
-            owned[:] = [w for w in owned if not w.done]
-        owned.append(wait)
+            self._owned = {wait: None}
+        else:
+            owned[wait] = None
+
+    def disown(self, wait: Any) -> None:
+        """An action it queued has ended: forget it at once, so that the finished action is
+        freed now rather than kept until the mission ends (objects that outlive a few
+        allocations get promoted by the garbage collector, whose full passes then grow with
+        the fleet)."""
+        owned = self._owned
+        if owned is not None:
+            owned.pop(wait, None)
 
     def keep_request(self, request: Any) -> None:
         """A request it was interrupted from: it stays for the mission to await again, and is
