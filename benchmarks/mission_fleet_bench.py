@@ -73,6 +73,37 @@ Z = 0.1
 _clock = time.process_time
 
 
+class GcTally:
+    """Collections by generation and their CPU time, while on (the timed steps)."""
+
+    def __init__(self) -> None:
+        self.on = False
+        self.count = [0, 0, 0]
+        self.seconds = 0.0
+        self._t0 = 0.0
+        self.last: dict[str, Any] = {}
+        gc.callbacks.append(self._callback)
+
+    def _callback(self, phase: str, info: dict[str, int]) -> None:
+        if not self.on:
+            return
+        if phase == "start":
+            self._t0 = _clock()
+        else:
+            self.count[info["generation"]] += 1
+            self.seconds += _clock() - self._t0
+
+    def start(self) -> None:
+        self.on, self.count, self.seconds = True, [0, 0, 0], 0.0
+
+    def stop(self) -> None:
+        self.on = False
+        self.last = {"collections": list(self.count), "seconds": self.seconds}
+
+
+GC = GcTally()
+
+
 def params() -> SimulationParams:
     """Headless, unpaced, dt 0.1 s, no collision checks."""
     return SimulationParams(
@@ -170,10 +201,13 @@ def run_queues(fleet: Fleet, steps: int, warmup: int, prequeued: bool = False) -
             queue(robot)
     for _ in range(warmup):
         sim.step_once()
+    GC.start()
     t0 = _clock()
     for _ in range(steps):
         sim.step_once()
-    return (_clock() - t0) * 1e3 / steps
+    elapsed = _clock() - t0
+    GC.stop()
+    return elapsed * 1e3 / steps
 
 
 def run_missions(fleet: Fleet, steps: int, warmup: int, backend: str) -> float:
@@ -199,11 +233,13 @@ def run_missions(fleet: Fleet, steps: int, warmup: int, backend: str) -> float:
 
     def clock(step: int, **_: Any) -> None:
         if step == warmup:
+            GC.start()
             started.append(_clock())
 
     sim.events.on("post_step", clock)
     fa.run(sim, main, backend=backend, until=(warmup + steps) * sim.params.timestep)
     elapsed = _clock() - started[0]
+    GC.stop()
     sim.events.off("post_step", clock)
     return elapsed * 1e3 / steps
 
@@ -243,7 +279,7 @@ def run_mode(
             ms = run_queues(fleet, steps, warmup, prequeued)
         else:
             ms = run_missions(fleet, steps, warmup, mode)
-        return ms, state(fleet)
+        return ms, {**state(fleet), "gc": GC.last}
     finally:
         fleet.sim.close()
 
@@ -263,6 +299,7 @@ def measure(
 ) -> dict[str, Any]:
     """Interleaved runs of every mode; raises AssertionError if two runs end differently."""
     times: dict[str, list[float]] = {mode: [] for mode in modes}
+    gcs: dict[str, list[dict[str, Any]]] = {mode: [] for mode in modes}
     reference: dict[str, Any] | None = None
     load_before = _load()
     for round_ in range(repeat):
@@ -273,7 +310,11 @@ def measure(
             elif not same_state(reference, end):
                 raise AssertionError(f"{mode} run {round_} ended in another state")
             times[mode].append(ms)
-            report(f"  round {round_} {mode:<8} {ms:8.3f} ms/step (load {_load()})")
+            gcs[mode].append(end["gc"])
+            report(
+                f"  round {round_} {mode:<8} {ms:8.3f} ms/step (load {_load()}; GC "
+                f"{end['gc']['collections']} collections, {end['gc']['seconds']:.2f} s)"
+            )
     result: dict[str, Any] = {
         "agents": n,
         "steps": steps,
@@ -283,6 +324,7 @@ def measure(
         "load_before": load_before,
         "load_after": _load(),
         "ms_per_step": times,
+        "gc": gcs,
         "median_ms": {mode: statistics.median(v) for mode, v in times.items()},
         "completed_actions": sum(reference["completed"]) if reference else 0,
     }
