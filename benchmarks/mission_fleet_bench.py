@@ -17,6 +17,10 @@ careful synchronous user writes it; ``--prequeued`` queues every loop of the run
 instead, which costs no handler at all). No collision checks: the figure is the mission
 layer's cost over the queues', and the rest of the step is the same in both.
 
+``--workload waits`` is the worst case for missions: no totes, and every robot loops a
+WaitAction of one step (``await robot.wait(0.1)``), an action that costs the queue almost
+nothing, so what is left is the mission layer's own cost per action.
+
 Both runs cover the same sim time, ``--warmup`` untimed steps then ``--steps`` timed ones, and
 must end in the same state: every robot's and tote's pose, what each robot carries, and how
 many actions each robot completed (checked after every run; ``tests/tasks/test_fleet_bench.py``
@@ -25,7 +29,8 @@ mode runs ``--repeat`` times, interleaved (queues, asyncio, trio, queues, ...), 
 and the median of the per-round ratios are reported, with the load average before and after.
 
 Run:  python benchmarks/mission_fleet_bench.py [--agents 10000] [--steps 300] [--warmup 10]
-          [--repeat 5] [--prequeued] [--modes queues asyncio trio] [--profile MODE] [--json]
+          [--repeat 5] [--prequeued] [--workload loop|waits] [--modes queues asyncio trio]
+          [--profile MODE] [--json]
 """
 
 from __future__ import annotations
@@ -70,6 +75,8 @@ START = -0.5
 in the step it starts: a queue starts the next action in that same step, a mission only once
 it resumed (at the step's end), and the two runs would drift apart by a step."""
 Z = 0.1
+TICK = 0.1
+"""s: the wait of the ``waits`` workload (one step)."""
 _clock = time.process_time
 
 
@@ -126,8 +133,9 @@ class Fleet:
     completed: dict[int, int]
 
 
-def build(n: int) -> Fleet:
-    """A fresh simulation with ``n`` robots and their totes (see the module doc)."""
+def build(n: int, totes: bool = True) -> Fleet:
+    """A fresh simulation with ``n`` robots and (unless ``totes`` is False) their totes (see
+    the module doc)."""
     sim = MultiRobotSimulationCore(params())
     cube = ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
     robots = Agent.spawn_batch(
@@ -142,11 +150,11 @@ def build(n: int) -> Fleet:
         ],
         sim,
     )
-    totes = [
+    boxes = [
         SimObject.from_mesh(cube, cube, Pose.from_xyz(SPACING * i, REACH, Z), sim_core=sim)
-        for i in range(n)
+        for i in range(n if totes else 0)
     ]
-    for tote in totes:
+    for tote in boxes:
         tote.pickable = True
     completed = {robot.object_id: 0 for robot in robots}
 
@@ -154,7 +162,7 @@ def build(n: int) -> Fleet:
         completed[agent.object_id] += 1
 
     sim.events.on("action_completed", count)
-    return Fleet(sim, robots, totes, completed)
+    return Fleet(sim, robots, boxes, completed)
 
 
 def loop_actions(column: float, tote: SimObject, lap: int) -> list[Action]:
@@ -169,24 +177,30 @@ def loop_actions(column: float, tote: SimObject, lap: int) -> list[Action]:
     ]
 
 
-def run_queues(fleet: Fleet, steps: int, warmup: int, prequeued: bool = False) -> float:
+def run_queues(
+    fleet: Fleet, steps: int, warmup: int, prequeued: bool = False, workload: str = "loop"
+) -> float:
     """ms per step (CPU) of the timed steps with the work queued as actions."""
     sim = fleet.sim
     laps = {robot.object_id: 0 for robot in fleet.robots}
     last: dict[int, Action] = {}
-    pairs = enumerate(zip(fleet.robots, fleet.totes, strict=True))
+    totes: list[Any] = list(fleet.totes) or [None] * len(fleet.robots)
+    pairs = enumerate(zip(fleet.robots, totes, strict=True))
     work = {robot.object_id: (SPACING * i, tote) for i, (robot, tote) in pairs}
 
     def queue(robot: Agent) -> None:
         key = robot.object_id
         column, tote = work[key]
-        seq = loop_actions(column, tote, laps[key])
+        if workload == "waits":
+            seq: list[Action] = [WaitAction(duration=TICK)]
+        else:
+            seq = loop_actions(column, tote, laps[key])
         laps[key] += 1
         last[key] = seq[-1]
         robot.add_action_sequence(seq)
 
     if prequeued:
-        per_lap = 70  # a lap takes more than 70 steps: enough laps for the whole run
+        per_lap = 1 if workload == "waits" else 70  # steps a lap takes at least
         for robot in fleet.robots:
             for _ in range((warmup + steps) // per_lap + 2):
                 queue(robot)
@@ -210,9 +224,15 @@ def run_queues(fleet: Fleet, steps: int, warmup: int, prequeued: bool = False) -
     return elapsed * 1e3 / steps
 
 
-def run_missions(fleet: Fleet, steps: int, warmup: int, backend: str) -> float:
+def run_missions(
+    fleet: Fleet, steps: int, warmup: int, backend: str, workload: str = "loop"
+) -> float:
     """ms per step (CPU) of the timed steps with every robot under its own mission."""
     sim = fleet.sim
+
+    async def waiter(robot: Agent) -> None:
+        while True:
+            await robot.wait(TICK)
 
     async def worker(robot: Agent, column: float, tote: SimObject) -> None:
         lap = 0
@@ -226,6 +246,10 @@ def run_missions(fleet: Fleet, steps: int, warmup: int, backend: str) -> float:
 
     async def main() -> None:
         async with sim.task_group() as tg:
+            if workload == "waits":
+                for robot in fleet.robots:
+                    tg.start_soon(waiter, robot)
+                return
             for i, (robot, tote) in enumerate(zip(fleet.robots, fleet.totes, strict=True)):
                 tg.start_soon(worker, robot, SPACING * i, tote)
 
@@ -250,7 +274,7 @@ def state(fleet: Fleet) -> dict[str, Any]:
     return {
         "step": sim.step_count,
         "robots": np.array([r.get_pose().position for r in fleet.robots]),
-        "totes": np.array([t.get_pose().position for t in fleet.totes]),
+        "totes": np.array([t.get_pose().position for t in fleet.totes]).reshape(-1, 3),
         "carried": [t.is_attached() for t in fleet.totes],
         "completed": [fleet.completed[r.object_id] for r in fleet.robots],
     }
@@ -268,17 +292,17 @@ def same_state(a: dict[str, Any], b: dict[str, Any]) -> bool:
 
 
 def run_mode(
-    mode: str, n: int, steps: int, warmup: int, prequeued: bool = False
+    mode: str, n: int, steps: int, warmup: int, prequeued: bool = False, workload: str = "loop"
 ) -> tuple[float, dict[str, Any]]:
     """One run of ``mode`` (``queues``, ``asyncio`` or ``trio``) in a fresh simulation:
     (ms per step, end state)."""
-    fleet = build(n)
+    fleet = build(n, totes=workload != "waits")
     try:
         gc.collect()
         if mode == "queues":
-            ms = run_queues(fleet, steps, warmup, prequeued)
+            ms = run_queues(fleet, steps, warmup, prequeued, workload)
         else:
-            ms = run_missions(fleet, steps, warmup, mode)
+            ms = run_missions(fleet, steps, warmup, mode, workload)
         return ms, {**state(fleet), "gc": GC.last}
     finally:
         fleet.sim.close()
@@ -295,6 +319,7 @@ def measure(
     repeat: int,
     modes: tuple[str, ...] = MODES,
     prequeued: bool = False,
+    workload: str = "loop",
     report: Callable[[str], None] = print,
 ) -> dict[str, Any]:
     """Interleaved runs of every mode; raises AssertionError if two runs end differently."""
@@ -304,7 +329,7 @@ def measure(
     load_before = _load()
     for round_ in range(repeat):
         for mode in modes:
-            ms, end = run_mode(mode, n, steps, warmup, prequeued)
+            ms, end = run_mode(mode, n, steps, warmup, prequeued, workload)
             if reference is None:
                 reference = end
             elif not same_state(reference, end):
@@ -321,6 +346,7 @@ def measure(
         "warmup": warmup,
         "repeat": repeat,
         "prequeued": prequeued,
+        "workload": workload,
         "load_before": load_before,
         "load_after": _load(),
         "ms_per_step": times,
@@ -343,11 +369,13 @@ def measure(
     return result
 
 
-def profile(mode: str, n: int, steps: int, warmup: int, prequeued: bool, top: int) -> None:
+def profile(
+    mode: str, n: int, steps: int, warmup: int, prequeued: bool, workload: str, top: int
+) -> None:
     """cProfile one run of ``mode``; print the top functions by internal time."""
     profiler = cProfile.Profile()
     profiler.enable()
-    run_mode(mode, n, steps, warmup, prequeued)
+    run_mode(mode, n, steps, warmup, prequeued, workload)
     profiler.disable()
     pstats.Stats(profiler).sort_stats("tottime").print_stats(top)
 
@@ -360,15 +388,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--modes", nargs="+", choices=MODES, default=list(MODES))
     parser.add_argument("--prequeued", action="store_true")
+    parser.add_argument("--workload", choices=("loop", "waits"), default="loop")
     parser.add_argument("--profile", choices=MODES, default=None)
     parser.add_argument("--top", type=int, default=40)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     if args.profile:
-        profile(args.profile, args.agents, args.steps, args.warmup, args.prequeued, args.top)
+        profile(
+            args.profile,
+            args.agents,
+            args.steps,
+            args.warmup,
+            args.prequeued,
+            args.workload,
+            args.top,
+        )
         return 0
     result = measure(
-        args.agents, args.steps, args.warmup, args.repeat, tuple(args.modes), args.prequeued
+        args.agents,
+        args.steps,
+        args.warmup,
+        args.repeat,
+        tuple(args.modes),
+        args.prequeued,
+        args.workload,
     )
     if args.json:
         print(json.dumps(result))

@@ -20,7 +20,7 @@ from collections.abc import Awaitable, Callable, Generator
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.tasks.errors import Cancelled, Interrupt, MissionCancelledError
-from fleet_async.tasks.kernel import PARKED, PENDING, URGENT, Kernel, SimEvent
+from fleet_async.tasks.kernel import PARKED, PENDING, URGENT, EventRun, Kernel, SimEvent
 from fleet_async.tasks.scopes import CancelScope, Delivery
 
 if TYPE_CHECKING:
@@ -403,33 +403,55 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
     queue = kernel.queue
     heappop = heapq.heappop
     after = kernel.after_event
-    while queue and queue[0][0] <= kernel.now:
-        event = heappop(queue)[3]
-        callbacks = event.callbacks
-        if callbacks is None:  # a disarmed timer
-            kernel.dead -= 1
-            continue
-        event.callbacks = None
-        if not callbacks:
-            unhandled = not event.ok and event.fails_run_unhandled and not event.defused
-            if unhandled and kernel.on_unhandled is not None:
-                kernel.on_unhandled(event)
-            continue
-        for callback in callbacks:
-            if callback.__class__ is not Mission:
-                callback(event)
+    run: EventRun | None = None  # a run of events being taken (kernel.EventRun)
+    run_entry: Any = None  # and its queue entry
+    try:
+        while True:
+            if run is not None:  # its next event, unless something scheduled since comes first
+                if run.next < len(run.events) and not (queue and queue[0] < run_entry):
+                    event = run.events[run.next]
+                    run.next += 1
+                else:
+                    if run.next < len(run.events):
+                        heapq.heappush(queue, run_entry)  # the rest waits its turn
+                    run = None
+                    continue
+            elif queue and queue[0][0] <= kernel.now:
+                entry = heappop(queue)
+                event = entry[3]
+                if event.__class__ is EventRun:
+                    run, run_entry = event, entry
+                    continue
+            else:
+                return
+            callbacks = event.callbacks
+            if callbacks is None:  # a disarmed timer
+                kernel.dead -= 1
                 continue
-            guard = event.guard
-            if guard is not None and not guard(callback):
+            event.callbacks = None
+            if not callbacks:
+                unhandled = not event.ok and event.fails_run_unhandled and not event.defused
+                if unhandled and kernel.on_unhandled is not None:
+                    kernel.on_unhandled(event)
                 continue
-            value = event.raw_value
-            if not event.ok and not event.per_waiter:
-                value = waiter_copy(value)
-            answer = callback.step(not event.ok, value)
-            while answer is not PARKED:  # a non-sim await: the host loop serves it
-                answer = yield from _forward(kernel, callback, answer)
-        if after is not None:
-            after()
+            for callback in callbacks:
+                if callback.__class__ is not Mission:
+                    callback(event)
+                    continue
+                guard = event.guard
+                if guard is not None and not guard(callback):
+                    continue
+                value = event.raw_value
+                if not event.ok and not event.per_waiter:
+                    value = waiter_copy(value)
+                answer = callback.step(not event.ok, value)
+                while answer is not PARKED:  # a non-sim await: the host loop serves it
+                    answer = yield from _forward(kernel, callback, answer)
+            if after is not None:
+                after()
+    finally:  # stopped mid-run (the host cancelled a forwarded await): the rest stays queued
+        if run is not None and run.next < len(run.events):
+            heapq.heappush(queue, run_entry)
 
 
 @types.coroutine
