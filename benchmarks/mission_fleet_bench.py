@@ -21,8 +21,9 @@ layer's cost over the queues', and the rest of the step is the same in both.
 WaitAction of one step (``await robot.wait(0.1)``), an action that costs the queue almost
 nothing, so what is left is the mission layer's own cost per action.
 
-Both runs cover the same sim time, ``--warmup`` untimed steps then ``--steps`` timed ones, and
-must end in the same state: every robot's and tote's pose, what each robot carries, and how
+Each run is a fresh process (the bodies are made before it is timed). Both runs cover the
+same sim time, ``--warmup`` untimed steps then ``--steps`` timed ones, and must end in the
+same state: every robot's and tote's pose, what each robot carries, and how
 many actions each robot completed (checked after every run; ``tests/tasks/test_fleet_bench.py``
 checks it at small N). Times are CPU seconds of this process (``time.process_time``); each
 mode runs ``--repeat`` times, interleaved (queues, asyncio, trio, queues, ...), and the medians
@@ -42,6 +43,8 @@ import json
 import os
 import pstats
 import statistics
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -156,6 +159,7 @@ def build(n: int, totes: bool = True) -> Fleet:
     ]
     for tote in boxes:
         tote.pickable = True
+    (boxes or robots)[0].body_id  # noqa: B018  # bodies are made now, not in the timed steps
     completed = {robot.object_id: 0 for robot in robots}
 
     def count(agent: Agent, **_: Any) -> None:
@@ -308,6 +312,39 @@ def run_mode(
         fleet.sim.close()
 
 
+def run_in_child(
+    mode: str, n: int, steps: int, warmup: int, prequeued: bool, workload: str
+) -> tuple[float, dict[str, Any]]:
+    """:func:`run_mode` in a fresh process (each run starts from the same heap, and the child
+    exits without the minutes a 20,000-body PyBullet disconnect takes)."""
+    args = [sys.executable, __file__, "--child", mode, "--agents", str(n), "--steps", str(steps)]
+    args += ["--warmup", str(warmup), "--workload", workload]
+    args += ["--prequeued"] if prequeued else []
+    done = subprocess.run(args, capture_output=True, text=True, check=False)
+    lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
+    if done.returncode != 0 or not lines:
+        raise RuntimeError(f"{mode} run failed:\n{done.stdout}\n{done.stderr}")
+    result = json.loads(lines[-1])
+    end = result["state"]
+    for key in ("robots", "totes"):
+        end[key] = np.array(end[key], dtype=float).reshape(-1, 3)
+    return result["ms"], end
+
+
+def _child(mode: str, n: int, steps: int, warmup: int, prequeued: bool, workload: str) -> None:
+    fleet = build(n, totes=workload != "waits")
+    gc.collect()
+    if mode == "queues":
+        ms = run_queues(fleet, steps, warmup, prequeued, workload)
+    else:
+        ms = run_missions(fleet, steps, warmup, mode, workload)
+    end = {**state(fleet), "gc": GC.last}
+    for key in ("robots", "totes"):
+        end[key] = end[key].tolist()  # floats survive JSON exactly (repr round-trips)
+    print(json.dumps({"ms": ms, "state": end}), flush=True)
+    os._exit(0)  # skip closing PyBullet: the parent has what it needs
+
+
 def _load() -> str:
     return "/".join(f"{x:.2f}" for x in os.getloadavg())
 
@@ -329,7 +366,7 @@ def measure(
     load_before = _load()
     for round_ in range(repeat):
         for mode in modes:
-            ms, end = run_mode(mode, n, steps, warmup, prequeued, workload)
+            ms, end = run_in_child(mode, n, steps, warmup, prequeued, workload)
             if reference is None:
                 reference = end
             elif not same_state(reference, end):
@@ -392,7 +429,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--profile", choices=MODES, default=None)
     parser.add_argument("--top", type=int, default=40)
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--child", choices=MODES, default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.child:
+        _child(args.child, args.agents, args.steps, args.warmup, args.prequeued, args.workload)
     if args.profile:
         profile(
             args.profile,
