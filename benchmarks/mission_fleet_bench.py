@@ -26,8 +26,9 @@ same sim time, ``--warmup`` untimed steps then ``--steps`` timed ones, and must 
 same state: every robot's and tote's pose, what each robot carries, and how
 many actions each robot completed (checked after every run; ``tests/tasks/test_fleet_bench.py``
 checks it at small N). Times are CPU seconds of this process (``time.process_time``); each
-mode runs ``--repeat`` times, interleaved (queues, asyncio, trio, queues, ...), and the medians
-and the median of the per-round ratios are reported, with the load average before and after.
+mode runs ``--repeat`` times, interleaved (the order rotates each round), and the medians
+and the median of the per-round ratios are reported, with the load average before and after
+(``--parallel``: each round's modes run at the same time, in their own processes).
 
 Run:  python benchmarks/mission_fleet_bench.py [--agents 10000] [--steps 300] [--warmup 10]
           [--repeat 5] [--prequeued] [--workload loop|waits] [--modes queues asyncio trio]
@@ -312,18 +313,23 @@ def run_mode(
         fleet.sim.close()
 
 
-def run_in_child(
+def start_child(
     mode: str, n: int, steps: int, warmup: int, prequeued: bool, workload: str
-) -> tuple[float, dict[str, Any]]:
-    """:func:`run_mode` in a fresh process (each run starts from the same heap, and the child
-    exits without the minutes a 20,000-body PyBullet disconnect takes)."""
+) -> subprocess.Popen[str]:
+    """Start :func:`run_mode` in a fresh process (each run starts from the same heap, and the
+    child exits without the minutes a 20,000-body PyBullet disconnect takes)."""
     args = [sys.executable, __file__, "--child", mode, "--agents", str(n), "--steps", str(steps)]
     args += ["--warmup", str(warmup), "--workload", workload]
     args += ["--prequeued"] if prequeued else []
-    done = subprocess.run(args, capture_output=True, text=True, check=False)
-    lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
-    if done.returncode != 0 or not lines:
-        raise RuntimeError(f"{mode} run failed:\n{done.stdout}\n{done.stderr}")
+    return subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def finish_child(mode: str, child: subprocess.Popen[str]) -> tuple[float, dict[str, Any]]:
+    """Wait for a child of :func:`start_child`: (ms per step, end state)."""
+    out, err = child.communicate()
+    lines = [line for line in out.splitlines() if line.startswith("{")]
+    if child.returncode != 0 or not lines:
+        raise RuntimeError(f"{mode} run failed:\n{out}\n{err}")
     result = json.loads(lines[-1])
     end = result["state"]
     for key in ("robots", "totes"):
@@ -357,6 +363,7 @@ def measure(
     modes: tuple[str, ...] = MODES,
     prequeued: bool = False,
     workload: str = "loop",
+    parallel: bool = False,
     report: Callable[[str], None] = print,
 ) -> dict[str, Any]:
     """Interleaved runs of every mode; raises AssertionError if two runs end differently."""
@@ -365,8 +372,14 @@ def measure(
     reference: dict[str, Any] | None = None
     load_before = _load()
     for round_ in range(repeat):
+        order = modes[round_ % len(modes) :] + modes[: round_ % len(modes)]
+        children = {}
+        for mode in order:  # one after the other, or all at once with ``parallel``
+            children[mode] = start_child(mode, n, steps, warmup, prequeued, workload)
+            if not parallel:
+                children[mode] = finish_child(mode, children[mode])
         for mode in modes:
-            ms, end = run_in_child(mode, n, steps, warmup, prequeued, workload)
+            ms, end = children[mode] if not parallel else finish_child(mode, children[mode])
             if reference is None:
                 reference = end
             elif not same_state(reference, end):
@@ -384,6 +397,7 @@ def measure(
         "repeat": repeat,
         "prequeued": prequeued,
         "workload": workload,
+        "parallel": parallel,
         "load_before": load_before,
         "load_after": _load(),
         "ms_per_step": times,
@@ -429,6 +443,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--profile", choices=MODES, default=None)
     parser.add_argument("--top", type=int, default=40)
     parser.add_argument("--json", action="store_true")
+    parser.add_argument(
+        "--parallel",
+        action="store_true",
+        help="run each round's modes at the same time, one process each (CPU times, paired "
+        "under the same load; for a machine too busy to run them one after the other)",
+    )
     parser.add_argument("--child", choices=MODES, default=None, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
@@ -452,6 +472,7 @@ def main(argv: list[str] | None = None) -> int:
         tuple(args.modes),
         args.prequeued,
         args.workload,
+        args.parallel,
     )
     if args.json:
         print(json.dumps(result))
