@@ -29,7 +29,17 @@ from fleet_async.tasks.errors import Cancelled, NoMissionRuntimeError
 if TYPE_CHECKING:
     from fleet_async.tasks.missions import Mission
 
-__all__ = ["NORMAL", "PENDING", "STEP", "URGENT", "Kernel", "SimEvent", "Timeout", "kernel_of"]
+__all__ = [
+    "NORMAL",
+    "PENDING",
+    "STEP",
+    "URGENT",
+    "EventRun",
+    "Kernel",
+    "SimEvent",
+    "Timeout",
+    "kernel_of",
+]
 
 URGENT = 0
 """Class of a mission's start, an interrupt and a cancel delivery (SimPy's URGENT)."""
@@ -205,6 +215,22 @@ class Timeout(SimEvent):
         heapq.heappush(kernel.queue, (self.due_step, NORMAL, kernel.seq, self))
 
 
+class EventRun:
+    """Events that share a class and a step, in their order, as one queue entry: what one
+    simulation step caused (the STEP class; ``Kernel.schedule_run``). The dispatch loop takes
+    them one at a time and, when something it scheduled meanwhile comes first, puts the rest
+    back under the same key: the order is exactly that of one entry per event, without a heap
+    push and pop for each."""
+
+    __slots__ = ("callbacks", "events", "next")
+
+    def __init__(self, events: list[SimEvent]) -> None:
+        self.events = events
+        self.next = 0
+        """Index of the first event not taken yet."""
+        self.callbacks = events  # never None: the entry is live (``Kernel.drop_due``)
+
+
 class Kernel:
     """The event queue, the clock it reads, and the mission being run.
 
@@ -273,6 +299,13 @@ class Kernel:
         step, "now" is the step's end: what the step causes happens when it ends."""
         self.seq += 1
         heapq.heappush(self.queue, (self.now + self.in_step + delay, cls, self.seq, event))
+
+    def schedule_run(self, events: list[SimEvent], cls: int) -> None:
+        """Put ``events`` in the queue now, with class ``cls``, in this order, as if each
+        were scheduled in turn (see :class:`EventRun`)."""
+        self.seq += 1
+        run: Any = EventRun(events)  # the dispatch loop tells it from a SimEvent
+        heapq.heappush(self.queue, (self.now + self.in_step, cls, self.seq, run))
 
     def next_step(self) -> int | None:
         """The step of the earliest queued event, or None when the queue is empty."""

@@ -20,7 +20,7 @@ from collections.abc import Awaitable, Callable, Generator
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.tasks.errors import Cancelled, Interrupt, MissionCancelledError
-from fleet_async.tasks.kernel import PARKED, PENDING, URGENT, Kernel, SimEvent
+from fleet_async.tasks.kernel import PARKED, PENDING, URGENT, EventRun, Kernel, SimEvent
 from fleet_async.tasks.scopes import CancelScope, Delivery
 
 if TYPE_CHECKING:
@@ -63,7 +63,7 @@ class Mission(SimEvent):
         self.key = key
         self._nursery = nursery
         self._children = 0
-        self._owned: list[Any] | None = None  # ActionWaits of the actions it queued
+        self._owned: dict[Any, None] | None = None  # ActionWaits of its unfinished actions
         self._kept: list[Any] | None = None  # requests it was interrupted from
         self.cancelled = False
         """Whether it ended by cancellation."""
@@ -82,14 +82,22 @@ class Mission(SimEvent):
     # ----- what it leaves behind ------------------------------------------------------------
 
     def own(self, wait: Any) -> None:
-        """An action it queued (an ActionWait): cancelled if unfinished when it ends."""
+        """An action it queued (an ActionWait): cancelled if unfinished when it ends (see
+        :meth:`disown`)."""
         owned = self._owned
         if owned is None:
-            self._owned = [wait]
-            return
-        if len(owned) >= 32:  # a long-lived mission: forget the finished ones
-            owned[:] = [w for w in owned if not w.done]
-        owned.append(wait)
+            self._owned = {wait: None}
+        else:
+            owned[wait] = None
+
+    def disown(self, wait: Any) -> None:
+        """An action it queued has ended: forget it at once, so that the finished action is
+        freed now rather than kept until the mission ends (objects that outlive a few
+        allocations get promoted by the garbage collector, whose full passes then grow with
+        the fleet)."""
+        owned = self._owned
+        if owned is not None:
+            owned.pop(wait, None)
 
     def keep_request(self, request: Any) -> None:
         """A request it was interrupted from: it stays for the mission to await again, and is
@@ -395,33 +403,55 @@ def dispatch(kernel: Kernel) -> Generator[Any, Any, None]:
     queue = kernel.queue
     heappop = heapq.heappop
     after = kernel.after_event
-    while queue and queue[0][0] <= kernel.now:
-        event = heappop(queue)[3]
-        callbacks = event.callbacks
-        if callbacks is None:  # a disarmed timer
-            kernel.dead -= 1
-            continue
-        event.callbacks = None
-        if not callbacks:
-            unhandled = not event.ok and event.fails_run_unhandled and not event.defused
-            if unhandled and kernel.on_unhandled is not None:
-                kernel.on_unhandled(event)
-            continue
-        for callback in callbacks:
-            if callback.__class__ is not Mission:
-                callback(event)
+    run: EventRun | None = None  # a run of events being taken (kernel.EventRun)
+    run_entry: Any = None  # and its queue entry
+    try:
+        while True:
+            if run is not None:  # its next event, unless something scheduled since comes first
+                if run.next < len(run.events) and not (queue and queue[0] < run_entry):
+                    event = run.events[run.next]
+                    run.next += 1
+                else:
+                    if run.next < len(run.events):
+                        heapq.heappush(queue, run_entry)  # the rest waits its turn
+                    run = None
+                    continue
+            elif queue and queue[0][0] <= kernel.now:
+                entry = heappop(queue)
+                event = entry[3]
+                if event.__class__ is EventRun:
+                    run, run_entry = event, entry
+                    continue
+            else:
+                return
+            callbacks = event.callbacks
+            if callbacks is None:  # a disarmed timer
+                kernel.dead -= 1
                 continue
-            guard = event.guard
-            if guard is not None and not guard(callback):
+            event.callbacks = None
+            if not callbacks:
+                unhandled = not event.ok and event.fails_run_unhandled and not event.defused
+                if unhandled and kernel.on_unhandled is not None:
+                    kernel.on_unhandled(event)
                 continue
-            value = event.raw_value
-            if not event.ok and not event.per_waiter:
-                value = waiter_copy(value)
-            answer = callback.step(not event.ok, value)
-            while answer is not PARKED:  # a non-sim await: the host loop serves it
-                answer = yield from _forward(kernel, callback, answer)
-        if after is not None:
-            after()
+            for callback in callbacks:
+                if callback.__class__ is not Mission:
+                    callback(event)
+                    continue
+                guard = event.guard
+                if guard is not None and not guard(callback):
+                    continue
+                value = event.raw_value
+                if not event.ok and not event.per_waiter:
+                    value = waiter_copy(value)
+                answer = callback.step(not event.ok, value)
+                while answer is not PARKED:  # a non-sim await: the host loop serves it
+                    answer = yield from _forward(kernel, callback, answer)
+            if after is not None:
+                after()
+    finally:  # stopped mid-run (the host cancelled a forwarded await): the rest stays queued
+        if run is not None and run.next < len(run.events):
+            heapq.heappush(queue, run_entry)
 
 
 @types.coroutine

@@ -71,7 +71,7 @@ class Runtime:
         self.predicates: dict[int, PredicateWait] = {}
         self.bus_waits: dict[str, dict[int, BusWait]] = {}
         self.streams: list[EventStream] = []
-        self._outcomes: list[tuple[int, int, ActionWait]] = []
+        self._outcomes: list[tuple[int, ActionWait]] = []
         self._bus_handlers: dict[str, Callable[..., None]] = {}
         self.kernel.on_failure = self._on_mission_failed
         self.kernel.on_unhandled = self._on_unhandled
@@ -160,9 +160,8 @@ class Runtime:
         kernel.now = self.sim.step_count
         if self._outcomes:
             outcomes, self._outcomes = self._outcomes, []
-            outcomes.sort(key=_agent_then_seq)
-            for _, _, wait in outcomes:
-                kernel.schedule(wait, STEP)
+            outcomes.sort(key=_agent)  # stable: ends of one agent's actions in their order
+            kernel.schedule_run([wait for _, wait in outcomes], STEP)
         if self.predicates:
             for key, pending in list(self.predicates.items()):
                 if pending.callbacks and pending.predicate():
@@ -185,8 +184,7 @@ class Runtime:
 
     def outcome(self, wait: ActionWait) -> None:
         """An awaited action ended during the step: order it among the step's outcomes."""
-        self.kernel.seq += 1
-        self._outcomes.append((wait.agent.object_id, self.kernel.seq, wait))
+        self._outcomes.append((wait.agent.object_id, wait))
 
     def _on_action_end(self, agent: Any = None, action: Any = None, **_: Any) -> None:
         wait = self.action_waits.pop(id(action), None)
@@ -336,8 +334,8 @@ class Runtime:
         return np.random.default_rng(self.sim.seed_sequence(0x3A55, *mission.key))
 
 
-def _agent_then_seq(entry: tuple[int, int, ActionWait]) -> tuple[int, int]:
-    return entry[0], entry[1]
+def _agent(entry: tuple[int, ActionWait]) -> int:
+    return entry[0]
 
 
 def _by_key(mission: Mission) -> tuple[int, ...]:

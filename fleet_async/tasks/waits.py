@@ -12,11 +12,12 @@ its robot in that step), unless another mission still waits on it.
 from __future__ import annotations
 
 import logging
+import threading
 from typing import TYPE_CHECKING, Any
 
 from fleet_async.core.missions import ActionStatus, MoveAction, WaitAction
 from fleet_async.tasks.errors import ActionCancelledError, ActionFailedError
-from fleet_async.tasks.kernel import SimEvent
+from fleet_async.tasks.kernel import PENDING, SimEvent
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Generator
@@ -25,6 +26,8 @@ if TYPE_CHECKING:
     from fleet_async.tasks.runtime import Runtime
 
 logger = logging.getLogger(__name__)
+
+_thread = threading.get_ident
 
 __all__ = ["ActionWait", "BusWait", "PredicateWait", "action_error"]
 
@@ -50,7 +53,7 @@ class ActionWait(SimEvent):
         what: How messages name the call that queued it (``agent.move`` ...).
     """
 
-    __slots__ = ("_runtime", "action", "agent", "detached", "what")
+    __slots__ = ("_runtime", "action", "agent", "detached", "owner", "what")
 
     fails_run_unhandled = False  # the robot's outcome: on the bus, and raised when awaited
 
@@ -62,14 +65,22 @@ class ActionWait(SimEvent):
         detached: bool = False,
         what: str = "agent.submit",
     ) -> None:
-        super().__init__(runtime.kernel)
+        # SimEvent's fields set here rather than through super(): one is made per action.
+        kernel = self.kernel = runtime.kernel
+        self.callbacks = []
+        self.raw_value = PENDING
+        self.ok = True
         self._runtime = runtime
         self.agent = agent
         self.action = action
         self.detached = detached
         self.what = what
-        owner = runtime.kernel.current
+        owner = kernel.current
+        self.owner: Mission | None = None
+        """The mission that queued the action and owns it until it ends (None: detached, or
+        queued outside a mission)."""
         if not detached and owner is not None:
+            self.owner = owner
             owner.own(self)
         if action.is_complete():
             self.settle(in_step=False)
@@ -79,6 +90,10 @@ class ActionWait(SimEvent):
     def settle(self, in_step: bool) -> None:
         """The action ended: trigger with its outcome (ordered as a step outcome if it ended
         during a step)."""
+        owner = self.owner
+        if owner is not None:
+            self.owner = None
+            owner.disown(self)
         error = action_error(self.action)
         if error is None:
             self.ok, self.raw_value = True, self.action
@@ -111,7 +126,9 @@ class ActionWait(SimEvent):
             if not self.callbacks:  # nobody else waits: nothing keeps it moving for nobody
                 self.action.cancel()
             raise kernel.outside_error(f"{self.what}(...)")
-        return (yield from super().__await__())
+        if _thread() != kernel.thread:  # SimEvent.__await__'s check, inlined
+            raise kernel.outside_error("awaiting a sim event")
+        return (yield self)
 
     # ----- the handle -----------------------------------------------------------------------
 

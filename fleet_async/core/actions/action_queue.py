@@ -39,6 +39,7 @@ class ActionQueue:
         self._due: set[int] = set()  # agents to advance at the next tick
         self._on_motion: set[int] = set()  # agents whose action waits for motion to end
         self._timers: list[tuple[float, int, int, Action]] = []
+        self._hooks: dict[int, Callable[[Action], None]] = {}  # cancel hooks, one per agent
         self._seq = 0
         self.now = 0.0
         """Sim time the queue is acting at: the step's start in the tick, its end after motion."""
@@ -99,7 +100,7 @@ class ActionQueue:
         key = agent.object_id
         self._agents[key] = agent
         self._queued.setdefault(key, deque()).append(action)
-        action.bind_cancel_hook(functools.partial(self._cancelled, agent))
+        action.bind_cancel_hook(self._hook(agent))
         self._due.add(key)
 
     def clear(self, agent: ActingAgent) -> None:
@@ -119,6 +120,7 @@ class ActionQueue:
             *self._queued.pop(key, ()),
         ]
         self._agents.pop(key, None)
+        self._hooks.pop(key, None)
         self._due.discard(key)
         self._on_motion.discard(key)
         for action in dropped:
@@ -138,6 +140,7 @@ class ActionQueue:
         self._queued.clear()
         self._current.clear()
         self._agents.clear()
+        self._hooks.clear()
         self._due.clear()
         self._on_motion.clear()
         self._timers.clear()
@@ -166,7 +169,7 @@ class ActionQueue:
             self._agents.setdefault(key, agent_of(key))
         for key, agent in self._agents.items():
             for action in (*self._queued.get(key, ()), *filter(None, [self._current.get(key)])):
-                action.bind_cancel_hook(functools.partial(self._cancelled, agent))
+                action.bind_cancel_hook(self._hook(agent))
         self._due = set(state["due"])
         self._on_motion = set(state["on_motion"])
         self._timers = list(state["timers"])
@@ -283,6 +286,14 @@ class ActionQueue:
             else SimEvents.ACTION_FAILED
         )
         self._emit(event, agent, action)
+
+    def _hook(self, agent: ActingAgent) -> Callable[[Action], None]:
+        """The cancel hook of ``agent``'s actions (one per agent: an allocation per queued
+        action would outlive the step and feed the garbage collector's older generations)."""
+        hook = self._hooks.get(agent.object_id)
+        if hook is None or hook.args[0] is not agent:  # type: ignore[attr-defined]
+            hook = self._hooks[agent.object_id] = functools.partial(self._cancelled, agent)
+        return hook
 
     def _cancelled(self, agent: ActingAgent, action: Action) -> None:
         key = agent.object_id

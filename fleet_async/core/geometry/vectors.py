@@ -84,19 +84,23 @@ def normalize_vector_param(value: float | Vector, param_name: str, dim: int = 3)
         ValueError: Naming ``param_name``, if ``value`` is not numeric, has the wrong length or
             contains NaN or infinity.
     """
-    expected = f"{param_name}: expected a number or {dim} numbers, got {value!r}"
+    # The message is built only on failure: formatting an array costs more than the checks.
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nesting
-        raise ValueError(expected) from exc
+        raise ValueError(_expected(param_name, dim, value)) from exc
     if raw.dtype.kind not in "iuf":  # rejects bools, strings and arbitrary objects
-        raise ValueError(expected)
+        raise ValueError(_expected(param_name, dim, value))
     arr = np.full(dim, float(raw)) if raw.ndim == 0 else raw.astype(np.float64)
     if arr.shape != (dim,):
-        raise ValueError(expected)
+        raise ValueError(_expected(param_name, dim, value))
     if not np.isfinite(arr).all():
         raise ValueError(f"{param_name}: expected finite numbers, got {value!r}")
     return arr
+
+
+def _expected(param_name: str, dim: int, value: Any) -> str:
+    return f"{param_name}: expected a number or {dim} numbers, got {value!r}"
 
 
 def strict_vector(value: Any, name: str, dim: int) -> np.ndarray:
