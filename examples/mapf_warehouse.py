@@ -5,10 +5,10 @@ Run:  python examples/mapf_warehouse.py [--map FILE.map] [--scen FILE.scen] [--r
 
 The map is a MovingAI ``.map`` file (the maps of the MAPF benchmarks and the League of Robot
 Runners), loaded as static obstacles with ``sim.load_map`` (cells of ``--cell`` metres). Without
-``--map`` the example writes a warehouse-like map of the size of MovingAI's
-warehouse-10-20-10-2-1 (161 x 63 cells: shelf blocks 10 cells long in rows 2 cells apart, cross
-aisles every 12 cells) and uses that. Start and goal cells come from a ``.scen`` file in its
-order (``--scen``), or are drawn from the simulation's random generator on free cells.
+``--map`` it is the benchmark set's own warehouse-10-20-10-2-1 (161 x 63 cells), shipped beside
+this script in ``maps/`` (source and licence in ``maps/README.md``). Start and goal cells come
+from a ``.scen`` file in its order (``--scen``), or are drawn from the simulation's random
+generator on free cells.
 
 Robots drive, they do not plan: each takes the shortest route of at most three straight legs
 (along its row, a column, the goal's row; or the other way round) that stays on free cells, and
@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import tempfile
 import time
 from pathlib import Path
 
@@ -40,21 +39,8 @@ from fleet_async import (
 from fleet_async.core.maps.readers import read_movingai_scen
 
 BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])  # 0.6 x 0.4 m robots on 1 m cells, 1 m/s
+WAREHOUSE = Path(__file__).resolve().parent / "maps" / "warehouse-10-20-10-2-1.map"
 FIELDS = {"deceleration": 1.0, "protective_margin": 0.1, "warning_margin": 0.3}
-
-
-def warehouse_map(width: int = 161, height: int = 63) -> str:
-    """A warehouse-like map in MovingAI's ``.map`` format (``@`` shelf, ``.`` free)."""
-    rows = []
-    for y in range(height):
-        inner = 2 <= y < height - 2 and y % 2 == 0
-        rows.append(
-            "".join(
-                "@" if inner and 2 <= x < width - 2 and (x - 2) % 12 < 10 else "."
-                for x in range(width)
-            )
-        )
-    return f"type octile\nheight {height}\nwidth {width}\nmap\n" + "\n".join(rows) + "\n"
 
 
 def routes(free: np.ndarray, tasks: np.ndarray) -> list[list[tuple[int, int]] | None]:
@@ -132,7 +118,12 @@ def pick_tasks(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--map", type=Path, help="a MovingAI .map file (default: generated)")
+    parser.add_argument(
+        "--map",
+        type=Path,
+        default=WAREHOUSE,
+        help=f"a MovingAI .map file (default: {WAREHOUSE.name})",
+    )
     parser.add_argument("--scen", type=Path, help="a MovingAI .scen file of start / goal cells")
     parser.add_argument("--robots", type=int, default=1000)
     parser.add_argument("--cell", type=float, default=1.0, help="cell edge (m)")
@@ -143,47 +134,43 @@ def main(argv: list[str] | None = None) -> int:
     if args.robots < 1:
         parser.error(f"--robots: expected a number >= 1, got {args.robots}")
 
-    with tempfile.TemporaryDirectory() as tmp:
-        map_path = args.map
-        if map_path is None:
-            map_path = Path(tmp) / "warehouse-161x63.map"
-            map_path.write_text(warehouse_map())
-        params = SimulationParams(
-            gui=False, monitor=False, target_rtf=0.0, timestep=0.1, seed=args.seed
-        )
-        with MultiRobotSimulationCore(params) as sim:
-            t0 = time.perf_counter()
-            grid = sim.load_map(map_path, resolution=args.cell)
-            free = ~grid.grid.occupied
-            tasks, chosen, skipped = pick_tasks(free, args.robots, sim.rng, args.scen)
-            r = args.cell
+    map_path = args.map
+    params = SimulationParams(
+        gui=False, monitor=False, target_rtf=0.0, timestep=0.1, seed=args.seed
+    )
+    with MultiRobotSimulationCore(params) as sim:
+        t0 = time.perf_counter()
+        grid = sim.load_map(map_path, resolution=args.cell)
+        free = ~grid.grid.occupied
+        tasks, chosen, skipped = pick_tasks(free, args.robots, sim.rng, args.scen)
+        r = args.cell
 
-            def at(x: int, y: int) -> Pose:  # MovingAI cell (x, y) -> its centre (m)
-                return Pose.from_xyz((x + 0.5) * r, (y + 0.5) * r, 0.2)
+        def at(x: int, y: int) -> Pose:  # MovingAI cell (x, y) -> its centre (m)
+            return Pose.from_xyz((x + 0.5) * r, (y + 0.5) * r, 0.2)
 
-            spawn = [
-                AgentSpawnParams(
-                    visual_shape=BOX,
-                    collision_shape=BOX,
-                    initial_pose=at(x, y),
-                    controller={"type": "omni", "max_linear_vel": 1.0, "max_linear_accel": 1.0},
-                    safety_field=FIELDS,
-                    name=f"robot_{k}",
-                )
-                for k, (x, y, _, _) in enumerate(tasks.tolist())
-            ]
-            fleet = Agent.spawn_batch(spawn, sim)
-            for robot, route in zip(fleet, chosen, strict=True):
-                robot.set_path([at(x, y) for x, y in route[1:]] or [at(*route[0])])
-            loaded = time.perf_counter() - t0
-            steps = math.ceil(args.duration / params.timestep - 1e-9)
-            if args.max_steps is not None:
-                steps = min(steps, args.max_steps)
-            t0 = time.perf_counter()
-            for _ in range(steps):
-                sim.step_once()
-            ran = time.perf_counter() - t0
-            report(sim, fleet, tasks, grid.lo, skipped, map_path, loaded, ran, steps)
+        spawn = [
+            AgentSpawnParams(
+                visual_shape=BOX,
+                collision_shape=BOX,
+                initial_pose=at(x, y),
+                controller={"type": "omni", "max_linear_vel": 1.0, "max_linear_accel": 1.0},
+                safety_field=FIELDS,
+                name=f"robot_{k}",
+            )
+            for k, (x, y, _, _) in enumerate(tasks.tolist())
+        ]
+        fleet = Agent.spawn_batch(spawn, sim)
+        for robot, route in zip(fleet, chosen, strict=True):
+            robot.set_path([at(x, y) for x, y in route[1:]] or [at(*route[0])])
+        loaded = time.perf_counter() - t0
+        steps = math.ceil(args.duration / params.timestep - 1e-9)
+        if args.max_steps is not None:
+            steps = min(steps, args.max_steps)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            sim.step_once()
+        ran = time.perf_counter() - t0
+        report(sim, fleet, tasks, grid.lo, skipped, map_path, loaded, ran, steps)
     return 0
 
 
