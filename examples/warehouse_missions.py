@@ -287,7 +287,7 @@ def waiting(sim: MultiRobotSimulationCore) -> str:
     stood = math.fsum(t for _, t in stats.values())
     return (
         f"{stops} safety stops, {stood:.1f} s stopped (summed over {len(stats)} robots with "
-        f"fields), {sim.safety.deadlocks_suspected} deadlocks suspected"
+        f"fields), deadlocks suspected: {sim.safety.deadlocks_suspected}"
     )
 
 
@@ -299,7 +299,7 @@ async def shift(sim: MultiRobotSimulationCore, robots: int = 6, orders: int = 12
         f"shift over: {tally['delivered']}/{len(order_list)} orders delivered, "
         f"{tally['failed']} failed, {sim.sim_time:.1f} s of sim time, "
         f"{sim.collision_count} contacts began (collisions); {waiting(sim)}, "
-        f"{tally['backed_off']} back-offs"
+        f"back-offs: {tally['backed_off']}"
     )
     return tally
 

@@ -292,6 +292,8 @@ class SafetyFields:
         self._motion.set_time_scale(scale)
         if table.held_count >= 2:
             self._watch_deadlocks()
+        elif self._watch.watching:  # no blocked set this step: one that forms again starts anew
+            self._watch.update((), self._sim.step_count, self._sim.params.timestep)
 
     def _hits(self, shapes: FieldShapes, active: np.ndarray) -> Hits:
         """Every obstacle in an active field (see ``safety_join.py``)."""

@@ -85,6 +85,11 @@ class DeadlockWatch:
             raise ValueError(f"deadlock_after: expected a number of seconds > 0, got {value!r}")
         self._after = float(value)
 
+    @property
+    def watching(self) -> bool:
+        """Whether some blocked set is being timed (an update with no sets would change it)."""
+        return bool(self._since or self._reported)
+
     def reset(self) -> None:
         """Forget every set and the count (simulation reset)."""
         self._since.clear()

@@ -289,3 +289,32 @@ def test_a_robot_does_not_start_into_an_obstacle_within_its_margin():
             sim.step_once()
         assert a.get_pose().x == 0.0
         assert log == [("start", 0, "a", ["wall"])]
+
+
+def test_a_blocked_set_that_breaks_up_and_forms_again_is_timed_from_its_return():
+    with make_sim() as sim:
+        sim.safety.deadlock_after = 5.0
+        a = robot(sim, 0.0, name="a")
+        b = robot(sim, 4.0, name="b", yaw=3.141592653589793)
+        times, stops = [], []
+        sim.events.on(
+            SimEvents.DEADLOCK_SUSPECTED, lambda sim_time, **_: times.append(round(sim_time, 9))
+        )
+        sim.events.on(SimEvents.SAFETY_STOP_STARTED, lambda **_: stops.append(sim.sim_time))
+        a.set_path([Pose.from_xyz(4.0, 0.0, 0.2)])
+        b.set_path([Pose.from_xyz(0.0, 0.0, 0.2)])
+        while len(sim.safety.stopped_agents()) < 2:
+            sim.step_once()
+        for _ in range(30):
+            sim.step_once()
+        a.stop()  # the pair breaks up: a no longer waits, b waits for a robot that may drive on
+        for _ in range(5):
+            sim.step_once()
+        assert sim.safety.stopped_agents() == [b]
+        a.set_path([Pose.from_xyz(4.0, 0.0, 0.2)])
+        while len(sim.safety.stopped_agents()) < 2:
+            sim.step_once()
+        formed_again = stops[-1]  # a's stop that closes the set again
+        for _ in range(80):
+            sim.step_once()
+        assert times == [round(formed_again + 5.0, 9)]  # 9.9 s; timed from 1.3 s it came at 6.3
