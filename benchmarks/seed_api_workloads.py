@@ -75,6 +75,24 @@ def _sim(m: dict[str, Any]) -> Any:
     return m["core_simulation"].MultiRobotSimulationCore(params)
 
 
+def _timed_steps(sim: Any, warmup: int, steps: int) -> tuple[float, float]:
+    """Collect garbage, run ``warmup`` steps, then time ``steps``: (wall ms, CPU ms) per step.
+
+    The collection comes before the warm-up, not after: a collection walks the whole heap, and
+    the step right after it runs on cold caches (at 100 robots 4-6x slower than the next).
+    """
+    gc.collect()
+    for _ in range(warmup):
+        sim.step_once()
+    t0, c0 = time.perf_counter(), time.process_time()
+    for _ in range(steps):
+        sim.step_once()
+    return (
+        (time.perf_counter() - t0) * 1000.0 / steps,
+        (time.process_time() - c0) * 1000.0 / steps,
+    )
+
+
 def _close(sim: Any) -> None:
     import pybullet as p
 
@@ -111,16 +129,7 @@ def fleet(m: dict[str, Any], n: int) -> dict[str, Any]:
     goals = rng.uniform(-10.0, side + 10.0, size=(len(movers), 2))
     for idx, (gx, gy) in zip(movers.tolist(), goals.tolist(), strict=True):
         agents[idx].set_goal_pose(pose_cls.from_xyz(gx, gy, 0.1))
-    # Collect before the warm-up, not after: a collection walks the whole heap, and the step
-    # right after it runs on cold caches (at 100 robots 4-6x slower than the next).
-    gc.collect()
-    for _ in range(WARMUP_STEPS):
-        sim.step_once()
-    t0, c0 = time.perf_counter(), time.process_time()
-    for _ in range(TIMED_STEPS):
-        sim.step_once()
-    step_ms = (time.perf_counter() - t0) * 1000.0 / TIMED_STEPS
-    step_cpu_ms = (time.process_time() - c0) * 1000.0 / TIMED_STEPS
+    step_ms, step_cpu_ms = _timed_steps(sim, WARMUP_STEPS, TIMED_STEPS)
     _close(sim)
     return {
         "workload": "fleet",
@@ -276,14 +285,7 @@ def realistic(m: dict[str, Any], n: int, steps: int = 200) -> dict[str, Any]:
         _realistic_robot(m, sim, i, side, rng)
     sim.step_once()
     spawn_s, spawn_cpu_s = time.perf_counter() - t0, time.process_time() - c0
-    gc.collect()
-    for _ in range(50):
-        sim.step_once()
-    t0, c0 = time.perf_counter(), time.process_time()
-    for _ in range(steps):
-        sim.step_once()
-    step_ms = (time.perf_counter() - t0) * 1000.0 / steps
-    step_cpu_ms = (time.process_time() - c0) * 1000.0 / steps
+    step_ms, step_cpu_ms = _timed_steps(sim, 50, steps)
     _close(sim)
     return {
         "workload": "realistic",
