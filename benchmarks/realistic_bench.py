@@ -9,7 +9,7 @@ Two workloads (both described in ``fleet_async/realistic_bench.py``):
 - ``full``: ``fleet-async bench --realistic`` (missions, KPIs), fleet_async only.
 
 Run:  python benchmarks/realistic_bench.py [--n 1000 10000] [--repeat 5] [--incumbent /tmp/pbf08]
-          [--incumbent-max 1000] [--full] [--json]
+          [--incumbent-max 1000] [--full] [--json] [--kernels auto|numpy|numba]
 """
 
 from __future__ import annotations
@@ -27,22 +27,26 @@ HERE = Path(__file__).resolve().parent
 WORKLOADS = HERE / "seed_api_workloads.py"
 
 
-def seed_run(python: str, package: str, n: int, steps: int) -> dict[str, Any]:
-    """One run of the seed-API workload in a fresh process; its JSON result."""
+def seed_run(
+    python: str, package: str, n: int, steps: int, kernels: str | None = None
+) -> dict[str, Any]:
+    """One run of the seed-API workload in a fresh process; its JSON result (``kernels``:
+    fleet_async's ``SimulationParams.kernels``)."""
     env = dict(os.environ)
     if package == "fleet_async":
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(HERE.parent), env.get("PYTHONPATH")]))
     cmd = [python, str(WORKLOADS), "--package", package, "realistic", str(n)]
-    cmd += ["--steps", str(steps)]
+    cmd += ["--steps", str(steps), *(["--kernels", kernels] if kernels else [])]
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True, cwd=HERE)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def full_run(n: int) -> dict[str, Any]:
+def full_run(n: int, kernels: str) -> dict[str, Any]:
     """One run of ``fleet-async bench --realistic`` in a fresh process."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(HERE.parent), env.get("PYTHONPATH")]))
     cmd = [sys.executable, "-m", "fleet_async", "bench", "--realistic", "--n", str(n), "--json"]
+    cmd += ["--kernels", kernels]
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True, cwd=HERE)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -61,6 +65,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--incumbent-max", type=int, default=1000, metavar="N")
     parser.add_argument("--full", action="store_true", help="also run the full version")
     parser.add_argument("--json", action="store_true", help="one JSON object per size")
+    parser.add_argument(
+        "--kernels",
+        choices=("auto", "numpy", "numba"),
+        default="auto",
+        help="fleet_async's SimulationParams.kernels (default %(default)s: the compiled "
+        "kernels when the fast extra is installed, as fleet-async bench)",
+    )
     args = parser.parse_args(argv)
     incumbent = None if args.incumbent is None else str(Path(args.incumbent) / "bin" / "python")
     for n in args.n:
@@ -68,11 +79,11 @@ def main(argv: list[str] | None = None) -> int:
         theirs: list[dict[str, Any]] = []
         full: list[dict[str, Any]] = []
         for _ in range(args.repeat):  # interleaved, so both sides see the same machine
-            ours.append(seed_run(sys.executable, "fleet_async", n, args.steps))
+            ours.append(seed_run(sys.executable, "fleet_async", n, args.steps, args.kernels))
             if incumbent is not None and n <= args.incumbent_max:
                 theirs.append(seed_run(incumbent, "pybullet_fleet", n, args.steps))
             if args.full:
-                full.append(full_run(n))
+                full.append(full_run(n, args.kernels))
         row: dict[str, Any] = {"n": n, "fleet_async": ours, "incumbent": theirs, "full": full}
         if theirs:
             for key in ("step_ms", "step_cpu_ms", "spawn_s", "spawn_cpu_s"):
@@ -83,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
             continue
         text = (
             f"N={n:>6} seed-API realistic: fleet_async step {_median(ours, 'step_ms'):.3f} ms"
-            f" (CPU {_median(ours, 'step_cpu_ms'):.3f}), spawn {_median(ours, 'spawn_s'):.3f} s"
+            f" (CPU {_median(ours, 'step_cpu_ms'):.3f}; {ours[0].get('kernels', 'numpy')}),"
+            f" spawn {_median(ours, 'spawn_s'):.3f} s"
             f" (CPU {_median(ours, 'spawn_cpu_s'):.3f})"
         )
         if theirs:

@@ -61,7 +61,8 @@ def _modules(package: str) -> dict[str, Any]:
     }
 
 
-def _sim(m: dict[str, Any]) -> Any:
+def _sim(m: dict[str, Any], kernels: str | None = None) -> Any:
+    extra = {} if kernels is None else {"kernels": kernels}  # fleet_async's own setting
     params = m["core_simulation"].SimulationParams(
         gui=False,
         monitor=False,
@@ -71,6 +72,7 @@ def _sim(m: dict[str, Any]) -> Any:
         collision_margin=0.02,
         collision_check_frequency=None,
         enable_floor=False,
+        **extra,
     )
     return m["core_simulation"].MultiRobotSimulationCore(params)
 
@@ -271,12 +273,14 @@ def _realistic_robot(m: dict[str, Any], sim: Any, i: int, side: int, rng: Any) -
         robot.add_action_sequence(queue)
 
 
-def realistic(m: dict[str, Any], n: int, steps: int = 200) -> dict[str, Any]:
+def realistic(
+    m: dict[str, Any], n: int, steps: int = 200, kernels: str | None = None
+) -> dict[str, Any]:
     """Spawn and step time of the realistic workload (see the module docstring)."""
     import numpy as np
 
     m["action"] = importlib.import_module(f"{m['agent'].__name__.rsplit('.', 1)[0]}.action")
-    sim = _sim(m)
+    sim = _sim(m, kernels)
     side = math.ceil(math.sqrt(n))
     rng = np.random.default_rng(SEED)
     gc.collect()
@@ -286,6 +290,7 @@ def realistic(m: dict[str, Any], n: int, steps: int = 200) -> dict[str, Any]:
     sim.step_once()
     spawn_s, spawn_cpu_s = time.perf_counter() - t0, time.process_time() - c0
     step_ms, step_cpu_ms = _timed_steps(sim, 50, steps)
+    fleet = getattr(sim, "fleet", None)
     _close(sim)
     return {
         "workload": "realistic",
@@ -294,6 +299,7 @@ def realistic(m: dict[str, Any], n: int, steps: int = 200) -> dict[str, Any]:
         "step_cpu_ms": step_cpu_ms,
         "spawn_s": spawn_s,
         "spawn_cpu_s": spawn_cpu_s,
+        **({} if kernels is None else {"kernels": "numba" if fleet.compiled else "numpy"}),
     }
 
 
@@ -314,12 +320,15 @@ def main(argv: list[str] | None = None) -> int:
     real_p = sub.add_parser("realistic", help="the realistic fleet in seed-API terms")
     real_p.add_argument("n", type=int)
     real_p.add_argument("--steps", type=int, default=200, help="timed steps (default 200)")
+    real_p.add_argument(
+        "--kernels", default=None, help="fleet_async's SimulationParams.kernels (default: its own)"
+    )
     args = parser.parse_args(argv)
     m = _modules(args.package)
     if args.workload == "fleet":
         result = fleet(m, args.n)
     elif args.workload == "realistic":
-        result = realistic(m, args.n, args.steps)
+        result = realistic(m, args.n, args.steps, args.kernels)
     else:
         result = spawn(m, args.n, args.kind, args.model, args.spacing)
     result["package"] = args.package

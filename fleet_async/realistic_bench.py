@@ -51,10 +51,10 @@ _BODY = ShapeParams("box", half_extents=[0.3, 0.2, 0.1])
 _TOTE = ShapeParams("box", half_extents=[0.15, 0.15, 0.1])
 
 
-def params() -> SimulationParams:
+def params(kernels: str = "numpy") -> SimulationParams:
     """The workload's settings: the bare benchmark's (headless, unpaced, dt 0.1 s, checks
-    every step), seeded."""
-    return dataclasses.replace(bench_params(), seed=SEED)
+    every step), seeded; ``kernels`` as ``SimulationParams.kernels``."""
+    return dataclasses.replace(bench_params(), seed=SEED, kernels=kernels)
 
 
 def _on_tick(obj: Any, dt: float) -> None:
@@ -133,12 +133,14 @@ def _main(sim: MultiRobotSimulationCore, missions: list[Any]) -> Any:
     return main
 
 
-def run(n: int, seconds: float = 30.0, reference: bool = False) -> dict[str, Any]:
+def run(
+    n: int, seconds: float = 30.0, reference: bool = False, kernels: str = "numpy"
+) -> dict[str, Any]:
     """Spawn, then run ``seconds`` of sim time; see the module docstring for the figures."""
     import fleet_async as fa  # the mission layer sits above core
 
     gc.collect()
-    with MultiRobotSimulationCore(params()) as sim:
+    with MultiRobotSimulationCore(params(kernels)) as sim:
         t0 = time.perf_counter()
         missions = build(sim, n)
         sim.step_once()
@@ -170,6 +172,7 @@ def run(n: int, seconds: float = 30.0, reference: bool = False) -> dict[str, Any
         "step_cpu_ms": timed_cpu * 1000.0 / max(steps, 1),
         "steps": steps,
         "reference": reference,
+        "kernels": "numba" if sim.fleet.compiled else "numpy",
         "distance_total_m": summary.distance_total_m,
         "collisions": summary.collisions,
         "battery_min_soc": summary.battery_min_soc,
@@ -217,7 +220,7 @@ def run_from_args(args: Any, out: TextIO | None = None) -> int:
         if n <= 0:
             raise ValueError(f"--n: fleet sizes must be > 0, got {n}")
     for n in sizes:
-        runs = [run(n, args.seconds) for _ in range(max(1, args.repeat))]
+        runs = [run(n, args.seconds, kernels=args.kernels) for _ in range(max(1, args.repeat))]
         row = dict(runs[0])
         row["step_ms_runs"] = [r["step_ms"] for r in runs]
         row["step_ms"] = statistics.median(row["step_ms_runs"])
@@ -230,7 +233,7 @@ def run_from_args(args: Any, out: TextIO | None = None) -> int:
                 f"N={n:>6} realistic: step {row['step_ms']:8.3f} ms "
                 f"(CPU {row['step_cpu_ms']:.3f} ms)  "
                 f"(runs {', '.join(f'{v:.3f}' for v in row['step_ms_runs'])}; "
-                f"{row['steps']} steps timed)  spawn {row['spawn_s']:6.3f} s  "
+                f"{row['steps']} steps timed, {row['kernels']})  spawn {row['spawn_s']:6.3f} s  "
                 f"collisions {row['collisions']}",
                 file=stream,
             )

@@ -56,6 +56,11 @@ class FleetMotion:
         self._still = False  # the last battery pass found no robot with a velocity
 
     @property
+    def compiled(self) -> bool:
+        """Whether the compiled (numba) kernels drive the engine (``SimulationParams.kernels``)."""
+        return self._compiled
+
+    @property
     def reference_path(self) -> bool:
         """Whether batteries are stepped robot by robot (the reference the numpy pass is
         tested against) instead of in one numpy pass. Both give the same bits."""
