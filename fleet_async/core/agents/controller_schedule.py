@@ -23,7 +23,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fleet_async.core.motion.controllers import KinematicController
+from fleet_async.core.geometry.pose import Pose
+from fleet_async.core.motion.controllers import GoalController, KinematicController
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -50,6 +51,22 @@ def _wake(agent: Agent) -> float | None:
     return wake
 
 
+def _lane(agent: Agent, chain: tuple[Controller, ...]) -> GoalController | None:
+    """``agent``'s one goal controller, when its goals may be sent in a batch: its
+    ``compute`` and the base's ``set_path`` are the built-in ones, the base is movable."""
+    if len(chain) != 1 or agent.use_fixed_base:
+        return None
+    ctrl, base = chain[0], agent.controller
+    if (
+        base is not None
+        and isinstance(ctrl, GoalController)
+        and type(ctrl).compute is GoalController.compute
+        and type(base).set_path is KinematicController.set_path
+    ):
+        return ctrl
+    return None
+
+
 class ControllerSchedule:
     """The controlled agents of one fleet: called every step, or woken."""
 
@@ -58,6 +75,8 @@ class ControllerSchedule:
         self._woken: dict[int, Agent] = {}
         self._agents: list[Agent] = []
         self._chains: list[tuple[Controller, ...]] = []
+        self._lanes: list[GoalController | None] = []  # an agent's goal controller, batched
+        self._pending: list[tuple[int, Pose]] = []  # (agent index, goal) not sent yet
         self._slots = np.zeros(0, dtype=np.int64)
         self._wakes = np.zeros(0)
         self._stale = False
@@ -119,9 +138,27 @@ class ControllerSchedule:
         if not len(due):
             return
         due = due[~engine.moving_mask(self._slots[due])]
-        agents, chains, wakes = self._agents, self._chains, self._wakes
+        agents, chains, wakes, lanes = self._agents, self._chains, self._wakes, self._lanes
         for k in due.tolist():
             agent = agents[k]
+            lane = lanes[k]
+            if lane is not None and not self._stale:
+                # GoalController.compute, with the goal sent in one batch (_send)
+                if (
+                    lane.ready()
+                    and not engine.is_moving(agent.motion_slot)
+                    and agent.get_current_action() is None
+                ):
+                    goal = lane.next_goal(agent, now)
+                    if goal is not None:
+                        if isinstance(goal, Pose) and not agent.path_visualize:
+                            self._pending.append((k, goal))
+                        else:
+                            agent.set_path([goal])
+                wake = lane.wake_time()
+                wakes[k] = -math.inf if wake is None else wake
+                continue
+            self._send(engine)  # every goal before any other controller runs
             if self._stale:  # a controller changed a chain: read every chain afresh
                 agent.step_controllers(dt)
                 wake = _wake(agent)
@@ -137,6 +174,24 @@ class ControllerSchedule:
                         break
                     wake = min(wake, when)
             wakes[k] = -math.inf if wake is None else wake
+        self._send(engine)
+
+    def _send(self, engine: KinematicEngine) -> None:
+        """Start the pending goals: what ``agent.set_path([goal])`` does for each, in one
+        batch (``KinematicEngine.start_goals``)."""
+        pending = self._pending
+        if not pending:
+            return
+        agents = [self._agents[k] for k, _ in pending]
+        goals = [goal for _, goal in pending]
+        pending.clear()
+        for agent in agents:
+            agent.motion_result = None
+        engine.start_goals(
+            [agent.motion_slot for agent in agents],
+            goals,
+            [agent.controller_params.default_direction for agent in agents],
+        )
 
     def idle_steps(self, step: int, dt: float, limit: int) -> int:
         """How many steps from ``step`` on (at most ``limit``) call no controller, given that
@@ -163,6 +218,7 @@ class ControllerSchedule:
         self._agents = agents
         # A woken agent's base is a built-in controller: a step calls its high-level ones.
         self._chains = [tuple(a.controllers[1:]) for a in agents]
+        self._lanes = [_lane(a, chain) for a, chain in zip(agents, self._chains, strict=True)]
         self._slots = np.array([a.motion_slot for a in agents], dtype=np.int64)
         wakes = [_wake(a) for a in agents]
         self._wakes = np.array([-math.inf if w is None else w for w in wakes])

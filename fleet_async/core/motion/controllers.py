@@ -38,6 +38,7 @@ __all__ = [
     "Controller",
     "ControllerParams",
     "DifferentialController",
+    "GoalController",
     "KinematicController",
     "OmniController",
     "PatrolController",
@@ -246,7 +247,34 @@ def params_dict(params: ControllerParams) -> dict[str, Any]:
     return {name: getattr(params, name) for name in ControllerParams.field_names()}
 
 
-class PatrolController(Controller):
+class GoalController(Controller):
+    """A high-level controller that sends its agent one goal at a time (patrol, random walk).
+
+    Each call, once the agent is free (not moving, no action running), :meth:`next_goal`
+    decides; a pose it returns is sent as a one-waypoint path (``agent.set_path([goal])``).
+    The fleet sends the goals of many such controllers in one pass (``ControllerSchedule``),
+    which gives the bits this per-agent :meth:`compute` gives; a subclass that overrides
+    ``compute`` is called on its own.
+    """
+
+    def compute(self, agent: ControlledAgent, dt: float) -> None:
+        """Send the next goal, if any, once the agent is free."""
+        if not self.ready() or agent.is_moving or agent.get_current_action() is not None:
+            return
+        goal = self.next_goal(agent, 0.0 if agent.sim_core is None else agent.sim_core.sim_time)
+        if goal is not None:
+            agent.set_path([goal])
+
+    def ready(self) -> bool:
+        """Whether the controller may still send goals (checked before the agent's state)."""
+        return True
+
+    def next_goal(self, agent: ControlledAgent, now: float) -> Pose | None:
+        """The goal to send now (the agent is free at sim time ``now``), or None to wait."""
+        raise NotImplementedError
+
+
+class PatrolController(GoalController):
     """Visit waypoints in order, pausing ``wait`` seconds at each; repeat if ``loop``.
 
     Args:
@@ -297,28 +325,29 @@ class PatrolController(Controller):
             return -math.inf
         return self._waiting_until
 
-    def compute(self, agent: ControlledAgent, dt: float) -> None:
-        """Send the next waypoint once the agent has arrived and waited."""
-        if self.finished or agent.is_moving or agent.get_current_action() is not None:
-            return
-        now = agent.sim_core.sim_time if agent.sim_core is not None else 0.0
+    def ready(self) -> bool:
+        """Until a patrol without ``loop`` has visited its last waypoint."""
+        return not self.finished
+
+    def next_goal(self, agent: ControlledAgent, now: float) -> Pose | None:
+        """The next waypoint once the agent has arrived and waited."""
         if self._sent:  # just arrived at waypoints[index]
             self._sent = False
             self.index += 1
             if self.index >= len(self.waypoints):
                 if not self.loop:
                     self.finished = True
-                    return
+                    return None
                 self.index = 0
             self._waiting_until = now + self.wait
         if self._waiting_until is not None and now + 1e-9 < self._waiting_until:
-            return
+            return None
         self._waiting_until = None
-        agent.set_path([self.waypoints[self.index]])
         self._sent = True
+        return self.waypoints[self.index]
 
 
-class RandomWalkController(Controller):
+class RandomWalkController(GoalController):
     """Wander to random points within ``radius`` of ``center``, pausing between moves.
 
     The random stream is derived from the simulation seed and the agent's object id, so a walk
@@ -371,12 +400,14 @@ class RandomWalkController(Controller):
             return -math.inf
         return self._waiting_until
 
-    def compute(self, agent: ControlledAgent, dt: float) -> None:
-        """Pick a new point once the agent has stopped and waited."""
+    def ready(self) -> bool:
+        """Once installed (the stream is the agent's)."""
+        return self._rng is not None
+
+    def next_goal(self, agent: ControlledAgent, now: float) -> Pose | None:
+        """A new point once the agent has stopped and waited."""
         rng = self._rng
-        if rng is None or agent.is_moving or agent.get_current_action() is not None:
-            return
-        now = agent.sim_core.sim_time if agent.sim_core is not None else 0.0
+        assert rng is not None
         # Each draw is Generator.uniform(low, high)'s own formula, low + (high - low) * d, on
         # the stream's next double d (the same bits, a third of the call's cost).
         if self._moved:
@@ -384,15 +415,15 @@ class RandomWalkController(Controller):
             lo, hi = self.wait_range
             self._waiting_until = now + (lo + (hi - lo) * rng.random())
         if self._waiting_until is not None and now + 1e-9 < self._waiting_until:
-            return
+            return None
         self._waiting_until = None
         assert self.center is not None
         angle = 2.0 * math.pi * rng.random()  # uniform(0, 2 pi)
         dist = self.radius * math.sqrt(rng.random())  # uniform()
         target = self.center + np.array([dist * math.cos(angle), dist * math.sin(angle), 0.0])
         target[2] = agent.get_pose().z
-        agent.set_goal_pose(Pose(target))
         self._moved = True
+        return Pose(target)
 
 
 CONTROLLER_REGISTRY: dict[str, type[Controller]] = {

@@ -41,6 +41,7 @@ from fleet_async.core.base.types import MovementDirection
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.quaternions import quat_from_euler, yaw_from_quats
 from fleet_async.core.motion.advance import PoseAdvance
+from fleet_async.core.motion.goal_starts import GoalStarts
 from fleet_async.core.motion.segments import (
     EPS_ANGLE,
     EPS_LEN,
@@ -79,7 +80,7 @@ class _Plan:
     aligned: bool = False
 
 
-class KinematicEngine(PoseAdvance):
+class KinematicEngine(GoalStarts, PoseAdvance):
     """Moves every slot's row of the state store by its path or velocity command.
 
     Args:
@@ -267,6 +268,19 @@ class KinematicEngine(PoseAdvance):
         )
         self._set_mode(slot, POSE)
         self._plan_next(slot)
+
+    def _plan_goal(self, slot: int, goal: Pose, direction: object) -> None:
+        """The plan ``set_path(slot, [goal])`` leaves once its straight segment started
+        (``start_goals``)."""
+        assert isinstance(direction, MovementDirection)
+        self._plans[slot] = _Plan(
+            waypoints=deque((goal,)),
+            direction=direction,
+            final_align=True,
+            final_orientation=goal.orientation.copy(),
+            total=1,
+            stage=_DRIVING,
+        )
 
     def set_velocity(self, slot: int, command: Sequence[float]) -> None:
         """Follow a body-frame velocity command (vx, vy, vz in m/s, wz in rad/s)."""

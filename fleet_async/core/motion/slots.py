@@ -232,6 +232,15 @@ class SlotTable:
         the arithmetic."""
         self._floats[:_SEGMENT_END, slot] = values
 
+    def segment_matrix(self, count: int) -> np.ndarray:
+        """Zeros shaped for the segment columns of ``count`` slots (``write_segments``)."""
+        return np.zeros((_SEGMENT_END, count))
+
+    def write_segments(self, slots: np.ndarray, columns: np.ndarray) -> None:
+        """``write_segment`` for many slots: ``columns[:, k]`` are ``slots[k]``'s, in the
+        matrix's rows (``AT``)."""
+        self._floats[:_SEGMENT_END, slots] = columns
+
     def _derive(self, slot: int) -> None:
         """Work out a slot's derived columns (``_DERIVED``) from its segment's columns."""
         at, row = AT, self._floats[:, slot]
