@@ -58,7 +58,7 @@ def _lane(agent: Agent, chain: tuple[Controller, ...]) -> GoalController | None:
         return None
     ctrl, base = chain[0], agent.controller
     if (
-        base is not None
+        isinstance(base, KinematicController)
         and isinstance(ctrl, GoalController)
         and type(ctrl).compute is GoalController.compute
         and type(base).set_path is KinematicController.set_path
