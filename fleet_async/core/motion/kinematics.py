@@ -455,9 +455,33 @@ class KinematicEngine(GoalStarts, PoseAdvance):
             self._advance_velocity(np.array([slot]), dt)
 
     def _arrived(self, slots: np.ndarray) -> None:
+        plans, mode, kind, row = self._plans, self.mode, self.kind, self.row
+        orientation = self._store.orientation
         for slot in slots.tolist():
-            if self.mode[slot] == POSE and self._plans[slot] is not None:
-                self._plan_next(slot)
+            plan = plans[slot]
+            if plan is None or mode[slot] != POSE:
+                continue
+            if (
+                plan.stage == _DRIVING
+                and len(plan.waypoints) == 1
+                and plan.final_align
+                and not plan.aligned
+                and kind[slot] == KIND_OMNI
+            ):
+                # How _plan_next ends an omni path whose final turn is none: _start finds the
+                # quaternions' |dot| at 1 (no angle) and nothing to drive, and the path ends.
+                goal = plan.final_orientation.tolist()
+                ax, ay, az, aw = orientation[row[slot]].tolist()
+                bx, by, bz, bw = goal
+                dot = ax * bx + ay * by + az * bz + aw * bw
+                if dot >= 1.0 or dot <= -1.0:
+                    plan.waypoints.popleft()
+                    plan.stage = _NONE
+                    plan.aligned = True
+                    self.q_goal[slot] = goal
+                    self._finish(slot, reached=True)
+                    continue
+            self._plan_next(slot)
 
     def _advance_velocity(self, s: np.ndarray, dt: float) -> None:
         limits = (self.vmax[s], self.amax[s], self.wmax[s], self.alpha[s])
