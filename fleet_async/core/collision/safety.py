@@ -317,17 +317,20 @@ class SafetyFields:
         everyone = np.arange(len(table.rows))
         z_lo, z_hi = table.z_band(everyone)
         own = self._own_index(rows, table.rows)
-        ahead = AHEAD * self._sim.params.timestep
+        velocity, ahead = store.velocity, AHEAD * self._sim.params.timestep
+
+        def shift(of_rows: np.ndarray) -> np.ndarray:
+            return velocity.take(of_rows, axis=0) * ahead
+
         self._join.update(
             (len(self._static_lo), self._static_version),
             table.rows,
             (np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))),
-            store.velocity.take(table.rows, axis=0) * ahead,
             rows,
             (lo, hi),
-            store.velocity.take(rows, axis=0) * ahead,
             (self._static_lo, self._static_hi),
             own,
+            shift,
         )
         owner, obstacle = self._join.field, self._join.obstacle
         sel = active[owner]

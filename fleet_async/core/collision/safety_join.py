@@ -25,6 +25,8 @@ over a column of an (N, 3) array, or along its axis 0, are several times slower.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 __all__ = ["AHEAD", "SKIN", "FieldPairs", "box_pairs"]
@@ -258,12 +260,11 @@ class FieldPairs:
         key: tuple[int, ...],
         field_rows: np.ndarray,
         f_box: tuple[np.ndarray, np.ndarray],
-        f_shift: np.ndarray,
         obstacle_rows: np.ndarray,
         o_box: tuple[np.ndarray, np.ndarray],
-        o_shift: np.ndarray,
         static: tuple[np.ndarray, np.ndarray],
         own: np.ndarray,
+        shift: Callable[[np.ndarray], np.ndarray],
     ) -> None:
         """Bring the pair list up to date with this step's boxes.
 
@@ -271,13 +272,13 @@ class FieldPairs:
             key: Changes whenever the static boxes change (their count and a version).
             field_rows: (M,) store rows of the fields' owners.
             f_box: (M, 3) minima and maxima of the fields (warning field, z band).
-            f_shift: (M, 3) how far each field moves in :data:`AHEAD` steps (m).
             obstacle_rows: (N,) store rows of the moving obstacles.
             o_box: (N, 3) their minima and maxima.
-            o_shift: (N, 3) how far each moves in :data:`AHEAD` steps (m).
             static: (S, 3) minima and maxima of the static boxes.
             own: (M,) each field's owner's index among the obstacles, -1 for none (that pair
                 is never listed).
+            shift: Maps store rows to how far each moves in :data:`AHEAD` steps ((K, 3) m);
+                asked only for the boxes grown in this step (most steps grow none).
         """
         same = (
             key == self._key
@@ -285,7 +286,7 @@ class FieldPairs:
             and np.array_equal(obstacle_rows, self._rows)
         )
         if not same:
-            self._build(key, field_rows, f_box, f_shift, obstacle_rows, o_box, o_shift, static, own)
+            self._build(key, field_rows, f_box, obstacle_rows, o_box, static, own, shift)
             return
         gf_lo, gf_hi = self._gf
         go_lo, go_hi = self._go
@@ -303,31 +304,32 @@ class FieldPairs:
         o_out = np.any((o_box[0] < go_lo[:n]) | (o_box[1] > go_hi[:n]), axis=1)
         nf, no = int(np.count_nonzero(f_out)), int(np.count_nonzero(o_out))
         if _REBUILD_SHARE * (nf + no) > len(field_rows) + n:
-            self._build(key, field_rows, f_box, f_shift, obstacle_rows, o_box, o_shift, static, own)
+            self._build(key, field_rows, f_box, obstacle_rows, o_box, static, own, shift)
             return
-        self._patch(f_out, o_out, f_box, f_shift, o_box, o_shift, own)
+        self._patch(f_out, o_out, f_box, o_box, own, shift)
 
     def _build(
         self,
         key: tuple[int, ...],
         field_rows: np.ndarray,
         f_box: tuple[np.ndarray, np.ndarray],
-        f_shift: np.ndarray,
         obstacle_rows: np.ndarray,
         o_box: tuple[np.ndarray, np.ndarray],
-        o_shift: np.ndarray,
         static: tuple[np.ndarray, np.ndarray],
         own: np.ndarray,
+        shift: Callable[[np.ndarray], np.ndarray],
     ) -> None:
         self.builds += 1
         self._key = key
         self._fields = field_rows.copy()
         self._rows = obstacle_rows.copy()
-        self._gf = _grown(*f_box, f_shift)
-        lo, hi = _grown(*o_box, o_shift)
+        self._gf = _grown(*f_box, shift(field_rows))
+        lo, hi = _grown(*o_box, shift(obstacle_rows))
         self._go = (np.concatenate((lo, static[0])), np.concatenate((hi, static[1])))
-        ext = self._gf[1][:, :2] - self._gf[0][:, :2]
-        self._cell = max(float(np.median(ext.max(axis=1))), 0.05) if len(ext) else 1.0
+        # A typical field's size: the median of the longer side (1-D columns: fast).
+        gf_lo, gf_hi = self._gf
+        side = np.maximum(gf_hi[:, 0] - gf_lo[:, 0], gf_hi[:, 1] - gf_lo[:, 1])
+        self._cell = max(float(np.median(side)), 0.05) if len(side) else 1.0
         f, o = box_pairs(*self._gf, lo, hi, self._cell)
         if len(static[0]):  # the map's boxes in a grid of their own (their sizes differ)
             fs, os_ = box_pairs(*self._gf, *static, self._cell)
@@ -340,19 +342,18 @@ class FieldPairs:
         f_out: np.ndarray,
         o_out: np.ndarray,
         f_box: tuple[np.ndarray, np.ndarray],
-        f_shift: np.ndarray,
         o_box: tuple[np.ndarray, np.ndarray],
-        o_shift: np.ndarray,
         own: np.ndarray,
+        shift: Callable[[np.ndarray], np.ndarray],
     ) -> None:
         """Grow the escaped boxes again and join them against everything."""
         self.patches += 1
         gf_lo, gf_hi = self._gf
         go_lo, go_hi = self._go
         fi, oi = f_out.nonzero()[0], o_out.nonzero()[0]
-        lo, hi = _grown(f_box[0][fi], f_box[1][fi], f_shift[fi])
+        lo, hi = _grown(f_box[0][fi], f_box[1][fi], shift(self._fields[fi]))
         gf_lo[fi], gf_hi[fi] = lo, hi
-        lo, hi = _grown(o_box[0][oi], o_box[1][oi], o_shift[oi])
+        lo, hi = _grown(o_box[0][oi], o_box[1][oi], shift(self._rows[oi]))
         go_lo[oi], go_hi[oi] = lo, hi
         o_mark = np.zeros(len(go_lo), dtype=bool)
         o_mark[oi] = True
