@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from fleet_async.core.base.compiled import use_numba
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.collision.safety_deadlock import DeadlockWatch, blocked_sets
 from fleet_async.core.collision.safety_geometry import (
@@ -104,6 +105,12 @@ class SafetyFields:
         self._static_cols: np.ndarray | None = None
         self._own: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._opaque: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # rows, kept
+        # check_jit's kernel, when numba is used (base/compiled.py): the same results
+        self._pair_hits: Callable[..., tuple[np.ndarray, np.ndarray]] = pair_hits
+        if use_numba(sim.params.kernels):
+            from fleet_async.core.collision.check_jit import field_pair_hits
+
+            self._pair_hits = field_pair_hits
         self._join = FieldPairs()
         self._layout = -1
         self._evaluator = "pairs"
@@ -340,7 +347,7 @@ class SafetyFields:
         if len(self._static_lo):
             boxes = np.concatenate((boxes, self._static_columns()), axis=1)
         fields = field_columns(shapes, table.warning_depth, table.protective_depth, z_lo, z_hi)
-        hit, prot = pair_hits(fields, boxes, owner, obstacle)
+        hit, prot = self._pair_hits(fields, boxes, owner, obstacle)
         owner, obstacle = owner[hit], obstacle[hit]
         obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)
         keep = table.not_carried(owner, obstacle_row, world)
