@@ -15,6 +15,7 @@ step either way. Quote the median of
 several runs (``farm-bench``) rather than one.
 
 Run:  python benchmarks/safety_bench.py [--robots 10000] [--steps 50] [--wall]
+      [--kernels numpy|auto|numba]
 """
 
 from __future__ import annotations
@@ -36,7 +37,9 @@ BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])
 WARMUP = 5
 
 
-def build(robots: int, fields: bool) -> tuple[MultiRobotSimulationCore, list[Agent]]:
+def build(
+    robots: int, fields: bool, kernels: str = "numpy"
+) -> tuple[MultiRobotSimulationCore, list[Agent]]:
     sim = MultiRobotSimulationCore(
         SimulationParams(
             gui=False,
@@ -45,6 +48,7 @@ def build(robots: int, fields: bool) -> tuple[MultiRobotSimulationCore, list[Age
             timestep=0.1,
             enable_floor=False,
             collision_check_frequency=None,
+            kernels=kernels,
         )
     )
     per_row = 100
@@ -65,10 +69,10 @@ def build(robots: int, fields: bool) -> tuple[MultiRobotSimulationCore, list[Age
     return sim, agents
 
 
-def measure(robots: int, steps: int, fields: bool) -> dict[str, float]:
+def measure(robots: int, steps: int, fields: bool, kernels: str) -> dict[str, float]:
     """Per-step medians (ms): the ``safety_fields`` phase, ``collision_check``, the step, the
     step's CPU time; and the phase's mean (the pair list's rebuilds are spikes)."""
-    sim, _ = build(robots, fields)
+    sim, _ = build(robots, fields, kernels)
     with sim:
         for _ in range(WARMUP):
             sim.step_once()
@@ -99,6 +103,13 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=50)
     parser.add_argument("--only", choices=("on", "off"), default=None)
     parser.add_argument(
+        "--kernels",
+        choices=("numpy", "auto", "numba"),
+        default="numpy",
+        help="SimulationParams.kernels (default numpy, the simulation's default); numba "
+        "kernels are compiled or loaded from their cache in the warm-up",
+    )
+    parser.add_argument(
         "--wall",
         action="store_true",
         help="phase times in wall time (default: the process's CPU time, steadier on a shared "
@@ -107,11 +118,14 @@ def main() -> None:
     args = parser.parse_args()
     if not args.wall:
         time.perf_counter = time.process_time  # the profile reads its clock at each step
-    print(f"{args.robots} robots, median over {args.steps} steps (ms per step):")
+    print(
+        f"{args.robots} robots, kernels {args.kernels}, median over {args.steps} steps "
+        "(ms per step):"
+    )
     for fields in (True, False):
         if args.only is not None and fields != (args.only == "on"):
             continue
-        m = measure(args.robots, args.steps, fields)
+        m = measure(args.robots, args.steps, fields, args.kernels)
         print(
             f"  fields {'on ' if fields else 'off'}: safety_fields {m['phase']:.3f} "
             f"(mean {m['phase_mean']:.3f}), collision_check {m['check']:.3f}, "

@@ -21,8 +21,9 @@ from fleet_async import (
 )
 from fleet_async.core.base import compiled
 from fleet_async.core.base.params import SimulationParams
+from fleet_async.core.collision import safety_geometry
 from fleet_async.core.collision.broadphase import candidate_pairs
-from fleet_async.core.collision.check_jit import SharedCellPairs
+from fleet_async.core.collision.check_jit import SharedCellPairs, field_pair_hits
 from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
@@ -182,3 +183,40 @@ def test_kernels_is_checked():
         compiled.use_numba("fortran")
     assert compiled.use_numba("numpy") is False
     assert compiled.use_numba("numba") is True and numba.__version__
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_safety_fields_pair_test_kernel_matches_numpy(seed):
+    """check_jit.field_pair_hits against safety_geometry.pair_hits on seeded fields and boxes
+    (turned fields, boxes touching on a grid of 0.25 m, some out of the z band, a NaN box)."""
+    rng = np.random.default_rng(seed)
+    m, k, p = 60, 80, 4000
+    travel = rng.normal(size=(m, 2))
+    travel /= np.hypot(travel[:, 0], travel[:, 1])[:, None]
+    heading = rng.normal(size=(m, 2))
+    heading /= np.hypot(heading[:, 0], heading[:, 1])[:, None]
+    shapes = safety_geometry.FieldShapes(
+        tuple(np.round(rng.uniform(0, 6, (2, m)) * 4) / 4),
+        (heading[:, 0], heading[:, 1]),
+        (travel[:, 0], travel[:, 1]),
+        rng.uniform(0.1, 0.5, m),
+        rng.uniform(0.1, 0.4, m),
+        rng.uniform(0.0, 0.2, m),
+    )
+    prot = rng.uniform(0.0, 1.0, m)
+    warn = prot + rng.uniform(0.0, 1.0, m)
+    fields = safety_geometry.field_columns(
+        shapes, warn, prot, rng.uniform(0.0, 0.3, m), rng.uniform(0.5, 1.0, m)
+    )
+    lo = np.round(rng.uniform(-1, 6, (k, 3)) * 4) / 4
+    lo[:, 2] = rng.uniform(-0.5, 1.2, k)
+    hi = lo + np.round(rng.uniform(0, 1.5, (k, 3)) * 4) / 4
+    lo[0] = np.nan
+    boxes = safety_geometry.box_columns(lo, hi)
+    field, box = rng.integers(0, m, p), rng.integers(0, k, p)
+    hit, in_prot = safety_geometry.pair_hits(fields, boxes, field, box)
+    hit_jit, in_prot_jit = field_pair_hits(fields, boxes, field, box)
+    assert 50 < len(hit) < p // 2  # the pairs mix hits and misses, protective and not
+    assert 0 < np.count_nonzero(in_prot) < len(hit)
+    assert np.array_equal(hit_jit, hit)
+    assert np.array_equal(in_prot_jit, in_prot)

@@ -1,7 +1,8 @@
 """Whether the step's hot loops run as compiled kernels (numba) or as numpy passes.
 
-The kinematic engine's advance (``motion/advance_jit.py``) and the collision broad phase
-(``collision/check_jit.py``) each have a numba kernel beside their numpy code. The
+The kinematic engine's advance (``motion/advance_jit.py``), the collision broad phase and the
+safety fields' exact pair test (``collision/check_jit.py``) each have a numba kernel beside
+their numpy code. The
 kernels are an optional extra (``pip install "fleet-async[fast]"``: numba ships wheels for
 Linux, macOS and Windows, no compiler needed); the numpy code is the reference and always
 there. Both give the same results bit for bit (``tests/core/test_compiled.py`` runs both on

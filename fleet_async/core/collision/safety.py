@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from fleet_async.core.base.compiled import use_numba
 from fleet_async.core.base.events import SimEvents
 from fleet_async.core.collision.safety_deadlock import DeadlockWatch, blocked_sets
 from fleet_async.core.collision.safety_geometry import (
@@ -104,6 +105,12 @@ class SafetyFields:
         self._static_cols: np.ndarray | None = None
         self._own: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._opaque: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # rows, kept
+        # check_jit's kernel, when numba is used (base/compiled.py): the same results
+        self._pair_hits: Callable[..., tuple[np.ndarray, np.ndarray]] = pair_hits
+        if use_numba(sim.params.kernels):
+            from fleet_async.core.collision.check_jit import field_pair_hits
+
+            self._pair_hits = field_pair_hits
         self._join = FieldPairs()
         self._layout = -1
         self._evaluator = "pairs"
@@ -317,17 +324,20 @@ class SafetyFields:
         everyone = np.arange(len(table.rows))
         z_lo, z_hi = table.z_band(everyone)
         own = self._own_index(rows, table.rows)
-        ahead = AHEAD * self._sim.params.timestep
+        velocity, ahead = store.velocity, AHEAD * self._sim.params.timestep
+
+        def shift(of_rows: np.ndarray) -> np.ndarray:
+            return velocity.take(of_rows, axis=0) * ahead
+
         self._join.update(
             (len(self._static_lo), self._static_version),
             table.rows,
             (np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))),
-            store.velocity.take(table.rows, axis=0) * ahead,
             rows,
             (lo, hi),
-            store.velocity.take(rows, axis=0) * ahead,
             (self._static_lo, self._static_hi),
             own,
+            shift,
         )
         owner, obstacle = self._join.field, self._join.obstacle
         sel = active[owner]
@@ -337,7 +347,7 @@ class SafetyFields:
         if len(self._static_lo):
             boxes = np.concatenate((boxes, self._static_columns()), axis=1)
         fields = field_columns(shapes, table.warning_depth, table.protective_depth, z_lo, z_hi)
-        hit, prot = pair_hits(fields, boxes, owner, obstacle)
+        hit, prot = self._pair_hits(fields, boxes, owner, obstacle)
         owner, obstacle = owner[hit], obstacle[hit]
         obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)
         keep = table.not_carried(owner, obstacle_row, world)

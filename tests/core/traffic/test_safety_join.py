@@ -24,10 +24,10 @@ BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])
 CRATE = ShapeParams("box", half_extents=[0.25, 0.25, 0.3])
 
 
-def crowd(evaluator: str, seed: int, robots: int = 120, steps: int = 150):
+def crowd(evaluator: str, seed: int, robots: int = 120, steps: int = 150, kernels="numpy"):
     """A seeded crowd: robots (both motion modes, random headings) driving random paths
     among each other, crates and a map's boxes; returns (events, poses per step, stats)."""
-    sim = MultiRobotSimulationCore(headless_params(enable_floor=True, seed=seed))
+    sim = MultiRobotSimulationCore(headless_params(enable_floor=True, seed=seed, kernels=kernels))
     sim.safety.evaluator = evaluator
     rng = np.random.default_rng(seed)
     side = int(np.ceil(np.sqrt(robots)))
@@ -80,10 +80,12 @@ def crowd(evaluator: str, seed: int, robots: int = 120, steps: int = 150):
     return log, poses, stats
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_fast_fields_match_the_reference_bit_for_bit(seed):
+@pytest.mark.parametrize(
+    ("seed", "kernels"), [(0, "numpy"), (1, "numpy"), (2, "numpy"), (0, "numba"), (3, "numba")]
+)
+def test_fast_fields_match_the_reference_bit_for_bit(seed, kernels):
     ref_log, ref_poses, ref_stats = crowd("reference", seed)
-    log, poses, stats = crowd("pairs", seed)
+    log, poses, stats = crowd("pairs", seed, kernels=kernels)
     assert len(ref_log) > 20  # the crowd stops robots: the comparison means something
     assert log == ref_log
     assert stats == ref_stats
