@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from fleet_async.core.base.memory import frozen_heap
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.checkpoint.api import CheckpointApi
 from fleet_async.core.maps.api import MapsApi
@@ -72,7 +73,8 @@ class MultiRobotSimulationCore(
         self._frame_gui_camera()
         self.setup_monitor()
         try:
-            run_loop(self, float(run_for), idle=self._gui_idle if self.is_gui else None)
+            with frozen_heap(self._params.gc_freeze):
+                run_loop(self, float(run_for), idle=self._gui_idle if self.is_gui else None)
         finally:
             self._stop_monitor()
             self._stop_recording_after_run()

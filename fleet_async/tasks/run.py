@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import anyio
 
-from fleet_async.core.missions import steps_for
+from fleet_async.core.missions import frozen_heap, steps_for
 from fleet_async.tasks.driver import Driver
 from fleet_async.tasks.groups import lone_error
 from fleet_async.tasks.kernel import SimEvent
@@ -165,7 +165,8 @@ async def run_async(
     runtime.kernel.thread = threading.get_ident()
     runtime.kernel.is_host_cancel = driver.is_host_cancel
     try:
-        await driver.run()
+        with frozen_heap(sim.params.gc_freeze):
+            await driver.run()
         # A run that fails ends its missions: they were cancelled with the run's root scope.
         ended = driver.ends_runtime() or bool(runtime.root.errors)
     finally:

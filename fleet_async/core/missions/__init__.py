@@ -17,7 +17,9 @@
 - device composites (``hooks.py``): ``register_mission_hook`` lets ``fleet_async.tasks.devices``
   implement ``elevator.ride`` and ``door.pass_through``, which need the mission layer's own
   primitives; ``DeviceEvents`` names what devices emit;
-- ``steps_for``: the package's one rule for sim seconds to whole steps (``core/base/steps.py``).
+- ``steps_for``: the package's one rule for sim seconds to whole steps (``core/base/steps.py``);
+- ``frozen_heap``: the run's hold on the garbage collector's full collections
+  (``core/base/memory.py``, ``SimulationParams.gc_freeze``).
 
 May import ``actions`` and below, at run time and for annotations alike.
 """
@@ -27,6 +29,7 @@ from __future__ import annotations
 from fleet_async.core.actions.action import Action, MoveAction, WaitAction
 from fleet_async.core.base.device_events import DeviceEvents
 from fleet_async.core.base.events import SimEvents
+from fleet_async.core.base.memory import frozen_heap
 from fleet_async.core.base.steps import steps_for
 from fleet_async.core.base.types import ActionStatus
 from fleet_async.core.missions.agent_missions import AgentMissionApi
@@ -57,6 +60,7 @@ __all__ = [
     "SimEvents",
     "SimMissionApi",
     "WaitAction",
+    "frozen_heap",
     "mission_hook",
     "register_mission_hook",
     "steps_for",
