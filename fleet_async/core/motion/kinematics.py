@@ -24,7 +24,8 @@ waypoint's orientation. Every segment starts and ends at rest and ends exactly o
 ``advance(dt)`` integrates all moving slots with numpy in one pass (velocity commands through
 ``velocity.py``). Python runs only when a segment ends (to plan the next one), never per robot
 per step; one-waypoint paths that start in the same step (the goals of patrols and random
-walks) start together (``start_goals``, ``goal_starts.py``). ``get_state`` / ``set_state`` hand every slot's columns and path to a checkpoint.
+walks) start together (``start_goals``, ``goal_starts.py``). ``get_state`` / ``set_state``
+hand every slot's columns and path to a checkpoint.
 """
 
 from __future__ import annotations
