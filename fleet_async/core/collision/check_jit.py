@@ -24,7 +24,11 @@ the work done in it.
 (``safety_geometry.pair_hits``): pair by pair, the very operations of the numpy code in the
 same order (numba neither fuses nor reorders floating-point operations unless asked to), so
 its answers are the same bit for bit; it stops at the first axis that separates a pair, as
-the numpy code tests only the pairs the previous axes kept. The fields' grid join
+the numpy code tests only the pairs the previous axes kept. :func:`field_speeds` and
+:func:`field_frames` lay the fields out for a step (``safety_state.FieldTable.shapes``, the
+field columns and the warning fields' bounds) in one pass over the owners instead of some
+forty numpy passes, each value by the numpy code's operations in its order
+(``tests/core/traffic/test_safety_join.py`` compares them step by step). The fields' grid join
 (``safety_join.box_pairs``) has no kernel: a straightforward one (the same grid, one loop per
 query and strip of cells) measured no faster than the numpy join at 10,000 robots (0.8-1.1 ms
 against 0.9), its time going into random reads of the cells' offsets.
@@ -35,7 +39,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["SharedCellPairs", "field_pair_hits", "refresh_upright"]
+__all__ = ["SharedCellPairs", "field_frames", "field_pair_hits", "field_speeds", "refresh_upright"]
 
 _HAND_OVER = -1  # the kernel's status when the numpy code must run
 _DIGIT = 11  # bits sorted per radix pass
@@ -290,3 +294,109 @@ def field_pair_hits(  # pragma: no cover - compiled; the numpy code is the refer
         prot[k] = _sat(fields, boxes, _CP, i, j)
         k += 1
     return hit[:k], prot[:k]
+
+
+@numba.njit(cache=True, nogil=True)
+def field_speeds(  # pragma: no cover - compiled; the numpy code is the reference
+    rows: np.ndarray, velocity: np.ndarray, moving_eps: float, speed: np.ndarray
+) -> int:
+    """Ground speeds (``speed``) of the field owners' store ``rows``; return how many stand
+    (slower than ``moving_eps``): ``safety_state.FieldTable.shapes``' first pass."""
+    standing = 0
+    for i in range(len(rows)):
+        r = rows[i]
+        speed[i] = np.hypot(velocity[r, 0], velocity[r, 1])
+        if not speed[i] > moving_eps:
+            standing += 1
+    return standing
+
+
+@numba.njit(cache=True, nogil=True)
+def field_frames(  # pragma: no cover - compiled; the numpy code is the reference
+    rows: np.ndarray,
+    store: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    seg: np.ndarray,
+    state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    params: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    limits: tuple[float, float],
+    speed: np.ndarray,
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """The rest of ``FieldTable.shapes``, ``z_band``, ``FieldShapes.bounds`` and
+    ``safety_geometry.field_columns`` in one pass over the field owners, each value by the
+    numpy code's operations in their order.
+
+    ``store``: the store's (velocity, orientation, position, on_path by row); ``seg``: the
+    (capacity, 2) directions of the segments about to be driven (read only for standing
+    owners); ``state``: (held, held_dir, held_speed, last_scale); ``params``: (decel,
+    margin_p, margin_w, half, side, z_off); ``limits``: (moving speed, clearance); ``speed``:
+    from :func:`field_speeds`. ``out``: (shape (8, M): cx, cy, ux, uy, wx, wy, ext_u, half_w;
+    depths (3, M): the planned speed, protective and warning depths; active (M,); fields
+    (21, M); lo and hi (M, 3): the warning fields' bounds with their z band)."""
+    velocity, orientation, position, on_path = store
+    held, held_dir, held_speed, last_scale = state
+    decel, margin_p, margin_w, half, side, z_off = params
+    moving_eps, clearance = limits
+    shape, depths, active, fields, lo, hi = out
+    for i in range(len(rows)):
+        r = rows[i]
+        v = speed[i]
+        moving = v > moving_eps
+        has_seg = False
+        sx = sy = 0.0
+        if not moving:
+            sx, sy = seg[r, 0], seg[r, 1]
+            has_seg = sx != 0.0 or sy != 0.0
+        active[i] = on_path[r] and (moving or held[i] or has_seg)
+        if moving:
+            tx, ty = velocity[r, 0] / v, velocity[r, 1] / v
+        elif has_seg:
+            tx, ty = sx, sy
+        elif held[i]:
+            tx, ty = held_dir[i, 0], held_dir[i, 1]
+        else:
+            tx, ty = 1.0, 0.0
+        last = last_scale[i]
+        depths[0, i] = held_speed[i] if held[i] else v / (last if last > 0 else 1.0)
+        prot = v * v / (2.0 * decel[i]) + margin_p[i]
+        warn = prot + margin_w[i]
+        depths[1, i], depths[2, i] = prot, warn
+        # heading_columns
+        qx, qy, qz, qw = orientation[r, 0], orientation[r, 1], orientation[r, 2], orientation[r, 3]
+        hx = 1.0 - 2.0 * (qy * qy + qz * qz)
+        hy = 2.0 * (qw * qz + qx * qy)
+        norm = np.hypot(hx, hy)
+        if norm < 1e-12:
+            norm = 1.0
+        hx, hy = hx / norm, hy / norm
+        # FieldShapes
+        cx, cy = position[r, 0], position[r, 1]
+        wx, wy = -ty, tx
+        cos = abs(tx * hx + ty * hy)
+        sin = abs(tx * hy - ty * hx)
+        ext_u = half[i, 0] * cos + half[i, 1] * sin
+        half_w = half[i, 0] * sin + half[i, 1] * cos + side[i]
+        shape[0, i], shape[1, i], shape[2, i], shape[3, i] = cx, cy, tx, ty
+        shape[4, i], shape[5, i], shape[6, i], shape[7, i] = wx, wy, ext_u, half_w
+        # z_band
+        z = position[r, 2]
+        z_lo = z + z_off[i, 0] + clearance
+        z_hi = z + z_off[i, 1]
+        # field_columns, and bounds of the warning field (the same terms)
+        aux, auy, awx, awy = abs(tx), abs(ty), abs(wx), abs(wy)
+        for at, depth in ((_CW, warn), (_CP, prot)):
+            h = 0.5 * depth
+            reach = ext_u + h
+            fields[at, i] = cx + tx * reach
+            fields[at + 1, i] = cy + ty * reach
+            fields[at + 2, i] = h
+            fields[at + 3, i] = aux * h + awx * half_w
+            fields[at + 4, i] = auy * h + awy * half_w
+        x, y = fields[_CW, i], fields[_CW + 1, i]
+        rx, ry = fields[_CW + 3, i], fields[_CW + 4, i]
+        lo[i, 0], lo[i, 1], lo[i, 2] = x - rx, y - ry, z_lo
+        hi[i, 0], hi[i, 1], hi[i, 2] = x + rx, y + ry, z_hi
+        fields[_UX, i], fields[_UY, i], fields[_WX, i], fields[_WY, i] = tx, ty, wx, wy
+        fields[_HW, i], fields[_AUX, i], fields[_AUY, i] = half_w, aux, auy
+        fields[_AWX, i], fields[_AWY, i] = awx, awy
+        fields[_ZLO, i], fields[_ZHI, i] = z_lo, z_hi

@@ -108,9 +108,14 @@ class SafetyFields:
         # check_jit's kernel, when numba is used (base/compiled.py): the same results
         self._pair_hits: Callable[..., tuple[np.ndarray, np.ndarray]] = pair_hits
         if use_numba(sim.params.kernels):
-            from fleet_async.core.collision.check_jit import field_pair_hits
+            from fleet_async.core.collision.check_jit import (
+                field_frames,
+                field_pair_hits,
+                field_speeds,
+            )
 
             self._pair_hits = field_pair_hits
+            self._table.kernels = (field_speeds, field_frames)
         self._join = FieldPairs()
         self._layout = -1
         self._evaluator = "pairs"
@@ -320,9 +325,14 @@ class SafetyFields:
             keep = self._opaque[1]
             rows, lo, hi = self._opaque[2], lo[keep], hi[keep]
         n_obj = len(rows)
-        f_lo, f_hi = shapes.bounds(table.warning_depth)  # for the pair list only
-        everyone = np.arange(len(table.rows))
-        z_lo, z_hi = table.z_band(everyone)
+        if table.frame is not None:  # the kernels laid the fields out
+            fields, field_lo, field_hi = table.frame
+        else:
+            f_lo, f_hi = shapes.bounds(table.warning_depth)  # for the pair list only
+            z_lo, z_hi = table.z_band(np.arange(len(table.rows)))
+            field_lo, field_hi = np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))
+            warn, prot = table.warning_depth, table.protective_depth
+            fields = field_columns(shapes, warn, prot, z_lo, z_hi)
         own = self._own_index(rows, table.rows)
         velocity, ahead = store.velocity, AHEAD * self._sim.params.timestep
 
@@ -332,7 +342,7 @@ class SafetyFields:
         self._join.update(
             (len(self._static_lo), self._static_version),
             table.rows,
-            (np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))),
+            (field_lo, field_hi),
             rows,
             (lo, hi),
             (self._static_lo, self._static_hi),
@@ -346,7 +356,6 @@ class SafetyFields:
         boxes = box_columns(lo, hi)
         if len(self._static_lo):
             boxes = np.concatenate((boxes, self._static_columns()), axis=1)
-        fields = field_columns(shapes, table.warning_depth, table.protective_depth, z_lo, z_hi)
         hit, prot = self._pair_hits(fields, boxes, owner, obstacle)
         owner, obstacle = owner[hit], obstacle[hit]
         obstacle_row = np.where(obstacle < n_obj, rows[np.minimum(obstacle, n_obj - 1)], -1)

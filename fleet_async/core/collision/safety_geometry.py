@@ -70,6 +70,14 @@ class FieldShapes:
         self.ext_u = half_length * cos + half_width * sin
         self.half_w = half_length * sin + half_width * cos + side
 
+    @classmethod
+    def of_columns(cls, columns: np.ndarray) -> FieldShapes:
+        """Shapes already worked out: (8, M) rows cx, cy, ux, uy, wx, wy, ext_u, half_w."""
+        shapes = cls.__new__(cls)
+        shapes.cx, shapes.cy, shapes.ux, shapes.uy = columns[:4]
+        shapes.wx, shapes.wy, shapes.ext_u, shapes.half_w = columns[4:]
+        return shapes
+
     @property
     def centre(self) -> np.ndarray:
         """(M, 2) robot centres."""

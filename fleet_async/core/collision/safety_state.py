@@ -27,6 +27,7 @@ _MOVING = 1e-6  # m/s: slower than this a robot has no direction of travel
 _CLEARANCE = 0.02  # m above the robot's lowest point where its fields begin
 _MIN_RAMP_SPEED = 0.05  # m/s: a slower plan ramps its time scale as if it drove at this
 _NO_AABB_HEIGHT = 1.0  # m: the field's height for a robot without collision geometry
+_NO_SEGMENTS = np.zeros((0, 2))
 
 Emit = Callable[..., None]
 
@@ -61,6 +62,10 @@ class FieldTable:
         self._active = np.zeros(0, dtype=bool)
         self.had_scale = False
         """Whether the last step held or slowed someone (so the next must reset the scale)."""
+        self.kernels: tuple[Callable[..., Any], Callable[..., Any]] | None = None
+        """``check_jit.field_speeds`` and ``field_frames``, when numba is used."""
+        self.frame: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        """The last :meth:`shapes`' field columns and warning bounds, from the kernels."""
         self._build([])
 
     def __len__(self) -> int:
@@ -212,6 +217,9 @@ class FieldTable:
                 path segment moves them (others stand or turn in place); asked only when
                 some robot with fields stands.
         """
+        if self.kernels is not None:
+            return self._shapes_compiled(on_path, segments)
+        self.frame = None
         store, rows, held = self._store, self.rows, self.held
         vx, vy = store.velocity[:, 0][rows], store.velocity[:, 1][rows]
         speed = self._cache("speed", (vx, vy), lambda c: np.hypot(c[0], c[1]))
@@ -253,6 +261,38 @@ class FieldTable:
             self.side,
         )
         self._shapes, self._active = shapes, active
+        return shapes, active
+
+    def _shapes_compiled(
+        self, on_path: np.ndarray, segments: Callable[[], tuple[np.ndarray, np.ndarray]]
+    ) -> tuple[FieldShapes, np.ndarray]:
+        """:meth:`shapes` as ``check_jit``'s kernels, which also lay out the field columns and
+        the warning fields' bounds (``frame``); the same values bit for bit."""
+        assert self.kernels is not None
+        speeds, frames = self.kernels
+        store, rows, m = self._store, self.rows, len(self.rows)
+        speed = np.empty(m)
+        seg = _NO_SEGMENTS
+        if speeds(rows, store.velocity, _MOVING, speed):  # some stand: their segments decide
+            seg_rows, seg_dirs = segments()
+            seg = np.zeros((store.capacity, 2))
+            seg[seg_rows] = seg_dirs
+        shape, depths = np.empty((8, m)), np.empty((3, m))
+        active, fields = np.empty(m, dtype=bool), np.empty((21, m))
+        lo, hi = np.empty((m, 3)), np.empty((m, 3))
+        frames(
+            rows,
+            (store.velocity, store.orientation, store.position, on_path),
+            seg,
+            (self.held, self.held_dir, self.held_speed, self.last_scale),
+            (self.decel, self.margin_p, self.margin_w, self.half, self.side, self.z_off),
+            (_MOVING, _CLEARANCE),
+            speed,
+            (shape, depths, active, fields, lo, hi),
+        )
+        self.speed, self.protective_depth, self.warning_depth = depths
+        shapes = FieldShapes.of_columns(shape)
+        self._shapes, self._active, self.frame = shapes, active, (fields, lo, hi)
         return shapes, active
 
     def _cache(self, name: str, inputs: tuple[np.ndarray, ...], fn: Callable[[Any], Any]) -> Any:

@@ -17,7 +17,9 @@ from fleet_async import (
     SimEvents,
     SimObject,
 )
+from fleet_async.core.collision.safety_geometry import field_columns
 from fleet_async.core.collision.safety_join import box_pairs
+from fleet_async.core.collision.safety_state import FieldTable
 from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])
@@ -92,6 +94,45 @@ def test_fast_fields_match_the_reference_bit_for_bit(seed, kernels):
     assert len(poses) == len(ref_poses)
     for step, (a, b) in enumerate(zip(poses, ref_poses, strict=True)):
         assert np.array_equal(a, b), f"poses differ at step {step + 1}"
+
+
+def test_compiled_field_frames_match_the_numpy_shapes_bit_for_bit(monkeypatch):
+    """Step by step, the kernels' shapes, depths, active flags, field columns and warning
+    bounds equal what the numpy code computes from the same state."""
+    seen: list[tuple[np.ndarray, ...]] = []
+    compiled = FieldTable._shapes_compiled
+
+    def checked(table, on_path, segments):
+        shapes, active = compiled(table, on_path, segments)
+        fields, lo, hi = table.frame
+        depths = (table.speed, table.protective_depth, table.warning_depth)
+        kernels, table.kernels = table.kernels, None
+        try:  # the numpy code on the same state (its memo only caches the same values)
+            ref, ref_active = FieldTable.shapes(table, on_path, segments)
+        finally:
+            table.kernels = kernels
+        ref_depths = (table.speed, table.protective_depth, table.warning_depth)
+        z_lo, z_hi = table.z_band(np.arange(len(table.rows)))
+        warn, prot = ref_depths[2], ref_depths[1]
+        ref_fields = field_columns(ref, warn, prot, z_lo, z_hi)
+        f_lo, f_hi = ref.bounds(warn)
+        names = ("cx", "cy", "ux", "uy", "wx", "wy", "ext_u", "half_w")
+        for name in names:
+            assert getattr(shapes, name).tobytes() == getattr(ref, name).tobytes(), name
+        assert active.tobytes() == ref_active.tobytes()
+        for got, want in zip(depths, ref_depths, strict=True):
+            assert got.tobytes() == want.tobytes()
+        assert fields.tobytes() == ref_fields.tobytes()
+        assert lo.tobytes() == np.column_stack((f_lo, z_lo)).tobytes()
+        assert hi.tobytes() == np.column_stack((f_hi, z_hi)).tobytes()
+        table.speed, table.protective_depth, table.warning_depth = depths
+        table._shapes, table._active, table.frame = shapes, active, (fields, lo, hi)
+        seen.append(active)
+        return shapes, active
+
+    monkeypatch.setattr(FieldTable, "_shapes_compiled", checked)
+    crowd("pairs", 4, robots=60, steps=80, kernels="numba")
+    assert len(seen) >= 75 and any(not a.all() for a in seen) and any(a.any() for a in seen)
 
 
 def test_an_unknown_evaluator_is_refused():
