@@ -41,6 +41,7 @@ from fleet_async.core.collision.safety_geometry import (
     box_columns,
     field_columns,
     pair_hits,
+    warning_bounds,
 )
 from fleet_async.core.collision.safety_join import AHEAD, FieldPairs
 from fleet_async.core.collision.safety_params import SafetyFieldParams
@@ -328,11 +329,10 @@ class SafetyFields:
         if table.frame is not None:  # the kernels laid the fields out
             fields, field_lo, field_hi = table.frame
         else:
-            f_lo, f_hi = shapes.bounds(table.warning_depth)  # for the pair list only
-            z_lo, z_hi = table.z_band(np.arange(len(table.rows)))
-            field_lo, field_hi = np.column_stack((f_lo, z_lo)), np.column_stack((f_hi, z_hi))
+            z_lo, z_hi = table.z_band()
             warn, prot = table.warning_depth, table.protective_depth
             fields = field_columns(shapes, warn, prot, z_lo, z_hi)
+            field_lo, field_hi = warning_bounds(fields)  # for the pair list only
         own = self._own_index(rows, table.rows)
         velocity, ahead = store.velocity, AHEAD * self._sim.params.timestep
 

@@ -20,6 +20,7 @@ __all__ = [
     "heading_of",
     "pair_hits",
     "rect_hits_box",
+    "warning_bounds",
 ]
 
 
@@ -179,6 +180,19 @@ def field_columns(
         np.add(auy * half, awy * half_w, out=out[at + 4])
     out[_UX:] = (ux, uy, wx, wy, half_w, aux, auy, awx, awy, z_lo, z_hi)
     return out
+
+
+def warning_bounds(fields: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(min (M, 3), max (M, 3)) of the warning fields of :func:`field_columns`' columns and
+    their z bands: :meth:`FieldShapes.bounds` (its centre and reach are these columns, by the
+    same operations) without working them out again."""
+    m = fields.shape[1]
+    lo, hi = np.empty((m, 3)), np.empty((m, 3))
+    for axis in (0, 1):
+        np.subtract(fields[_CW + axis], fields[_CW + 3 + axis], out=lo[:, axis])
+        np.add(fields[_CW + axis], fields[_CW + 3 + axis], out=hi[:, axis])
+    lo[:, 2], hi[:, 2] = fields[_ZLO], fields[_ZHI]
+    return lo, hi
 
 
 def box_columns(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

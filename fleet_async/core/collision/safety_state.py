@@ -201,8 +201,11 @@ class FieldTable:
         self.resolved[:] = True
         self._z_known[todo] = True
 
-    def z_band(self, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(bottom, top) (m) of the fields of entries ``owners``."""
+    def z_band(self, owners: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(bottom, top) (m) of the fields of entries ``owners`` (None: every entry)."""
+        if owners is None:
+            z = self._store.position[:, 2][self.rows]
+            return z + self.z_off[:, 0] + _CLEARANCE, z + self.z_off[:, 1]
         z = self._store.position[:, 2][self.rows[owners]]
         return z + self.z_off[owners, 0] + _CLEARANCE, z + self.z_off[owners, 1]
 
