@@ -179,11 +179,11 @@ def run(
     }
 
 
-def trace(n: int, seconds: float, reference: bool) -> list[Any]:
+def trace(n: int, seconds: float, reference: bool, kernels: str = "numpy") -> list[Any]:
     """Every step's poses, charges and KPIs of the workload, for the parity test."""
     import fleet_async as fa
 
-    with MultiRobotSimulationCore(params()) as sim:
+    with MultiRobotSimulationCore(params(kernels)) as sim:
         missions = build(sim, n)
         sim.step_once()
         if reference:

@@ -66,6 +66,7 @@ class PoseAdvance(SlotTable):
                 store.angular_velocity,
                 store.dirty,
                 store.moved,
+                store.written,
                 arrived,
                 u_old,
             )

@@ -46,6 +46,7 @@ def advance_translation(  # pragma: no cover - compiled; the numpy twin is the r
     angular_velocity: np.ndarray,
     dirty: np.ndarray,
     moved: np.ndarray,
+    written: np.ndarray,
     arrived: np.ndarray,
     u_old: np.ndarray,
 ) -> tuple[int, int]:
@@ -57,7 +58,8 @@ def advance_translation(  # pragma: no cover - compiled; the numpy twin is the r
         scale: Per slot, the step's time scale (safety fields); empty for 1.0 everywhere.
         position, velocity, angular_velocity: The store's (N, 3) columns (written; the
             angular velocity of rows that do not turn is zeroed).
-        dirty, moved: The store's flags (set for ``rows``).
+        dirty, moved, written: The store's flags (set for ``rows``, as
+            ``KinematicState.mark_moved`` sets them).
         arrived, u_old: Filled for the first ``len(slots)`` entries: whether the slot's
             segment ended in this step, and its progress before the step (buffers kept by
             the caller: fresh ones cost page faults at 100,000 slots).
@@ -112,4 +114,5 @@ def advance_translation(  # pragma: no cover - compiled; the numpy twin is the r
             angular_velocity[r, 2] = 0.0
         dirty[r] = True
         moved[r] = True
+        written[r] = True
     return n_arrived, n_turning
