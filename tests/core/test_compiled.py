@@ -19,11 +19,14 @@ from fleet_async import (
     ShapeParams,
     SimObject,
 )
+from fleet_async.core.agents import batteries
+from fleet_async.core.agents.batteries import BatteryBank
 from fleet_async.core.base import compiled
 from fleet_async.core.base.params import SimulationParams
 from fleet_async.core.collision import safety_geometry
 from fleet_async.core.collision.broadphase import candidate_pairs
 from fleet_async.core.collision.check_jit import SharedCellPairs, field_pair_hits
+from fleet_async.core.world.state import KinematicState
 from tests.conftest import headless_params
 
 BOX = ShapeParams("box", half_extents=[0.05, 0.05, 0.05])
@@ -220,3 +223,43 @@ def test_the_safety_fields_pair_test_kernel_matches_numpy(seed):
     assert 0 < np.count_nonzero(in_prot) < len(hit)
     assert np.array_equal(hit_jit, hit)
     assert np.array_equal(in_prot_jit, in_prot)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_battery_kernel_matches_the_numpy_pass(seed):
+    """batteries_jit.drive_batteries against BatteryBank.drive's numpy pass on the same seeded
+    batteries and velocities, step by step: charging and not, standing spans between drives,
+    charges at the bounds (0 and 1), a spin without a velocity, a NaN velocity."""
+    rng = np.random.default_rng(seed)
+    n = 300
+    store = KinematicState(capacity=n)
+    rows = store.allocate_many(
+        np.arange(n), np.full(n, -1), np.zeros((n, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    )
+    banks = [BatteryBank(lambda: 0, 0.1, store, capacity=8, compiled=c) for c in (False, True)]
+    for i in range(n):
+        values = {name: float(rng.uniform(0.0, 0.02)) for name in batteries.FIELDS}
+        values["soc0"] = float(rng.choice([0.0, 1.0, rng.uniform(0.0, 1.0)]))
+        values["used0"] = values["distance"] = 0.0
+        for bank in banks:
+            bank.add(dict(values), 0, bool(i % 3 == 0), int(rows[i]), True)
+    moved_any = []
+    for step in range(40):
+        velocity = rng.normal(size=(n, 3)) * (rng.random((n, 1)) < 0.6)
+        spin = np.zeros((n, 3))
+        spin[rng.random(n) < 0.05, 2] = 0.5
+        if step == 7:
+            velocity[5] = np.nan
+        store.velocity[:n], store.angular_velocity[:n] = velocity, spin
+        if step % 9 == 0:  # a standing step for everyone: nothing is applied
+            store.velocity[:n] = 0.0
+            store.angular_velocity[:n] = 0.0
+        results = [bank.drive(step) for bank in banks]
+        assert results[0] == results[1]
+        moved_any.append(results[0])
+        for name in batteries.FIELDS:
+            assert banks[0].values[name].tobytes() == banks[1].values[name].tobytes(), name
+        assert banks[0].step0.tobytes() == banks[1].step0.tobytes()
+    assert any(moved_any) and not all(moved_any)
+    soc = banks[0].values["soc0"][:n]
+    assert (soc == 0.0).any() and np.isnan(soc).any()

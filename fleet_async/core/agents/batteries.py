@@ -59,6 +59,7 @@ class BatteryBank:
         store: The state store whose velocities drive the batteries (None: a battery
             outside any simulation, which never drives).
         capacity: Initial number of slots.
+        compiled: Drive with the numba kernel (``batteries_jit.py``) instead of numpy.
     """
 
     def __init__(
@@ -67,8 +68,14 @@ class BatteryBank:
         dt: float,
         store: KinematicState | None = None,
         capacity: int = 16,
+        compiled: bool = False,
     ) -> None:
         self._clock = clock
+        self._kernel: Callable[..., bool] | None = None
+        if compiled:  # the numba kernel of drive (batteries_jit.py): the same bits
+            from fleet_async.core.agents.batteries_jit import drive_batteries
+
+            self._kernel = drive_batteries
         self._store = store
         self.dt = dt
         self.values = {name: np.zeros(capacity) for name in FIELDS}
@@ -197,6 +204,12 @@ class BatteryBank:
         slots, store = self._vector(), self._store
         if not len(slots) or store is None:
             return False
+        if self._kernel is not None:
+            values = tuple(self.values[name] for name in FIELDS)
+            motion = (store.velocity, store.angular_velocity)
+            return self._kernel(
+                slots, self.row, motion, self.charging, self.step0, values, step, self.dt
+            )
         rows = self.row[slots]
         vel, spin = store.velocity[rows], store.angular_velocity[rows]
         sq = vel[:, 0] * vel[:, 0] + vel[:, 1] * vel[:, 1] + vel[:, 2] * vel[:, 2]

@@ -49,7 +49,9 @@ class FleetMotion:
         self._plugged: dict[int, list[AgentPlugin]] = {}
         self._limits: dict[tuple[Any, ...], MotionLimits] = {}
         self._dt = sim.params.timestep
-        self.batteries = BatteryBank(self._battery_clock, self._dt, sim.state)
+        self.batteries = BatteryBank(
+            self._battery_clock, self._dt, sim.state, compiled=self._compiled
+        )
         self._battery_of: dict[int, list[BatteryPlugin]] = {}
         self._driven_step = -1
         self._reference = False
@@ -185,7 +187,9 @@ class FleetMotion:
         self._slot_agent.clear()
         self._controlled.clear()
         self._plugged.clear()
-        self.batteries = BatteryBank(self._battery_clock, self._dt, self._sim.state)
+        self.batteries = BatteryBank(
+            self._battery_clock, self._dt, self._sim.state, compiled=self._compiled
+        )
         self._battery_of.clear()
         self._driven_step = -1
         self._still = False

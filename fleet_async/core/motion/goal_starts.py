@@ -27,7 +27,7 @@ from fleet_async.core.world.state import KinematicState
 
 __all__ = ["BATCH_MIN", "GoalStarts"]
 
-BATCH_MIN = 48
+BATCH_MIN = 16
 """Goals below which a batch starts them one by one: its few dozen numpy calls cost more."""
 
 
