@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from fleet_async import Agent, AgentSpawnParams, MultiRobotSimulationCore, Pose, ShapeParams
+from fleet_async.core.motion.controllers import PatrolController
 from fleet_async.core.motion.goal_starts import BATCH_MIN
 from fleet_async.core.motion.slots import SEGMENT_COLUMNS
 from tests.conftest import headless_params
@@ -160,3 +161,76 @@ def test_batched_goals_run_the_reference_trace() -> None:
     reference: list[int] = []
     _walkers(reference=True, batches=reference)
     assert not reference  # the reference path sends each goal on its own
+
+
+class _Polite(PatrolController):
+    """Skips a spot another robot is heading to: a decision that reads the other robots."""
+
+    def next_goal(self, agent, now):
+        goal = super().next_goal(agent, now)
+        if goal is None:
+            return None
+        taken = [o.goal_pose for o in agent.sim_core.agents if o is not agent and o.goal_pose]
+        for spot in (goal, Pose.from_xyz(0.0, 5.0, 0.1), Pose.from_xyz(5.0, 5.0, 0.1)):
+            if not any(np.array_equal(t.position, spot.position) for t in taken):
+                return spot
+        return None
+
+
+class _Logged(Agent):
+    """Counts its motion commands (an agent class that overrides them, to log or veto)."""
+
+    def set_path(self, path, *args, **kwargs):
+        self.user_data["calls"] = self.user_data.get("calls", 0) + 1
+        super().set_path(path, *args, **kwargs)
+
+
+def _overrides(reference: bool) -> tuple[list, list[int], bytes]:
+    """20 robots with patrols that read each other (first half) and on an agent class of
+    their own (second half), started together."""
+    sim = MultiRobotSimulationCore(headless_params(enable_floor=False))
+    with sim:
+        agents = []
+        for i in range(40):
+            pose = Pose.from_xyz(0.0, 0.25 * i, 0.1)
+            if i < 20:
+                agent = Agent.from_params(
+                    AgentSpawnParams(
+                        visual_shape=None,
+                        collision_shape=BOX,
+                        initial_pose=pose,
+                        controller=[{"type": "omni"}],
+                    ),
+                    sim_core=sim,
+                )
+                agent.add_controller(_Polite(waypoints=[[5.0, 0.0, 0.1]], wait=0.0))
+            else:
+                patrol = {
+                    "type": "patrol",
+                    "waypoints": [[3.0, 0.25 * i, 0.1], [0.0, 0.25 * i, 0.1]],
+                }
+                agent = _Logged.from_params(
+                    AgentSpawnParams(
+                        visual_shape=None,
+                        collision_shape=BOX,
+                        initial_pose=pose,
+                        controller=[{"type": "omni"}, patrol],
+                    ),
+                    sim_core=sim,
+                )
+            agents.append(agent)
+        sim.fleet.reference_path = reference
+        sim.step_once()
+        goals = [None if a.goal_pose is None else a.goal_pose.position.tolist() for a in agents]
+        for _ in range(60):
+            sim.step_once()
+        calls = [a.user_data.get("calls", 0) for a in agents[20:]]
+        return goals, calls, sim.state.position.tobytes()
+
+
+def test_controllers_and_agents_that_override_their_methods_run_one_by_one():
+    batched, reference = _overrides(reference=False), _overrides(reference=True)
+    assert batched == reference
+    goals, calls, _ = batched
+    assert goals[1] == [0.0, 5.0, 0.1]  # the second robot saw the first one's goal
+    assert min(calls) > 1  # every patrol leg went through the agent's own set_path

@@ -24,7 +24,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fleet_async.core.geometry.pose import Pose
-from fleet_async.core.motion.controllers import GoalController, KinematicController
+from fleet_async.core.motion.controllers import (
+    GoalController,
+    KinematicController,
+    PatrolController,
+    RandomWalkController,
+)
 
 if TYPE_CHECKING:
     from fleet_async.core.agents.agent import Agent
@@ -51,19 +56,32 @@ def _wake(agent: Agent) -> float | None:
     return wake
 
 
+_BATCHED = (PatrolController, RandomWalkController)
+_CONTROLLER_METHODS = ("compute", "ready", "next_goal", "send", "wake_time")
+_AGENT_METHODS = ("set_path", "set_goal_pose", "is_moving", "get_current_action")
+
+
 def _lane(agent: Agent, chain: tuple[Controller, ...]) -> GoalController | None:
-    """``agent``'s one goal controller, when its goals may be sent in a batch: its
-    ``compute`` and the base's ``set_path`` are the built-in ones, the base is movable."""
+    """``agent``'s one goal controller, when its goals may be started in a batch: a patrol or
+    random walk whose decisions are the built-in ones (they read and change only their own
+    state and their agent's pose, so deferring the starts to the end of the pass changes
+    nothing they see), on a movable agent whose motion commands and base are built in."""
+    from fleet_async.core.agents.agent import Agent  # agent.py sits above this module
+
     if len(chain) != 1 or agent.use_fixed_base:
         return None
     ctrl, base = chain[0], agent.controller
-    if (
+    if not (
         isinstance(base, KinematicController)
-        and isinstance(ctrl, GoalController)
-        and type(ctrl).compute is GoalController.compute
         and type(base).set_path is KinematicController.set_path
+        and all(getattr(type(agent), n) is getattr(Agent, n) for n in _AGENT_METHODS)
     ):
-        return ctrl
+        return None
+    for cls in _BATCHED:
+        if isinstance(ctrl, cls):
+            kind = type(ctrl)
+            if all(getattr(kind, n) is getattr(cls, n) for n in _CONTROLLER_METHODS):
+                return ctrl
     return None
 
 
@@ -138,6 +156,12 @@ class ControllerSchedule:
         if not len(due):
             return
         due = due[~engine.moving_mask(self._slots[due])]
+        try:
+            self._call(engine, due, now, dt)
+        finally:  # the goals decided before a failure start, as one by one they would have
+            self._send(engine)
+
+    def _call(self, engine: KinematicEngine, due: np.ndarray, now: float, dt: float) -> None:
         agents, chains, wakes, lanes = self._agents, self._chains, self._wakes, self._lanes
         for k in due.tolist():
             agent = agents[k]
@@ -154,7 +178,7 @@ class ControllerSchedule:
                         if isinstance(goal, Pose) and not agent.path_visualize:
                             self._pending.append((k, goal))
                         else:
-                            agent.set_path([goal])
+                            lane.send(agent, goal)
                 wake = lane.wake_time()
                 wakes[k] = -math.inf if wake is None else wake
                 continue
@@ -174,7 +198,6 @@ class ControllerSchedule:
                         break
                     wake = min(wake, when)
             wakes[k] = -math.inf if wake is None else wake
-        self._send(engine)
 
     def _send(self, engine: KinematicEngine) -> None:
         """Start the pending goals: what ``agent.set_path([goal])`` does for each, in one
@@ -185,6 +208,9 @@ class ControllerSchedule:
         agents = [self._agents[k] for k, _ in pending]
         goals = [goal for _, goal in pending]
         pending.clear()
+        if not all(agent.motion_slot >= 0 for agent in agents):  # removed meanwhile: none
+            keep = [i for i, agent in enumerate(agents) if agent.motion_slot >= 0]
+            agents, goals = [agents[i] for i in keep], [goals[i] for i in keep]
         for agent in agents:
             agent.motion_result = None
         engine.start_goals(

@@ -16,9 +16,14 @@ as the simulation: agents, their controllers and plugins, poses, the actions wai
 seventh of the step. For the length of a run (``fleet_async.run`` / ``run_async``,
 ``run_simulation``) :func:`frozen_heap` keeps the objects that exist when it starts out of the
 collector's view (``gc.freeze``) and gives them back when it ends (``gc.unfreeze``), so the
-run's collections walk only what the run made. Cyclic garbage among the frozen objects waits
-for the first collection after the run. A process that froze objects itself, or turned the
-collector off, is left as it is; ``SimulationParams.gc_freeze = False`` turns this off.
+run's collections walk only what the run made. What that costs, while the run lasts: cyclic
+garbage among the frozen objects (a reference cycle dropped during the run) waits for the first
+collection after it, even an explicit ``gc.collect()`` inside the run cannot reclaim it;
+``gc.get_objects()`` does not list the frozen objects (a leak hunt sees only what the run
+made); and a ``gc.freeze()`` of the program's own made during the run is undone with the run's.
+A process that froze objects before the run, or turned the collector off, is left as it is;
+``SimulationParams.gc_freeze = False`` turns this off (for a leak hunt, or a run that drops
+large cycles of objects it had before).
 """
 
 from __future__ import annotations

@@ -250,11 +250,10 @@ def params_dict(params: ControllerParams) -> dict[str, Any]:
 class GoalController(Controller):
     """A high-level controller that sends its agent one goal at a time (patrol, random walk).
 
-    Each call, once the agent is free (not moving, no action running), :meth:`next_goal`
-    decides; a pose it returns is sent as a one-waypoint path (``agent.set_path([goal])``).
-    The fleet sends the goals of many such controllers in one pass (``ControllerSchedule``),
-    which gives the bits this per-agent :meth:`compute` gives; a subclass that overrides
-    ``compute`` is called on its own.
+    Once the agent is free (not moving, no action running), :meth:`next_goal` decides and
+    :meth:`send` sends. The built-in patrols and random walks due in one step start together
+    (``ControllerSchedule``: the bits of this :meth:`compute`); a subclass overriding these
+    methods or ``wake_time``, or an agent class overriding its motion commands, runs alone.
     """
 
     def compute(self, agent: ControlledAgent, dt: float) -> None:
@@ -263,7 +262,11 @@ class GoalController(Controller):
             return
         goal = self.next_goal(agent, 0.0 if agent.sim_core is None else agent.sim_core.sim_time)
         if goal is not None:
-            agent.set_path([goal])
+            self.send(agent, goal)
+
+    def send(self, agent: ControlledAgent, goal: Pose) -> None:
+        """Send ``goal``: ``agent.set_path([goal])``."""
+        agent.set_path([goal])
 
     def ready(self) -> bool:
         """Whether the controller may still send goals (checked before the agent's state)."""
@@ -403,6 +406,10 @@ class RandomWalkController(GoalController):
     def ready(self) -> bool:
         """Once installed (the stream is the agent's)."""
         return self._rng is not None
+
+    def send(self, agent: ControlledAgent, goal: Pose) -> None:
+        """Send ``goal``: ``agent.set_goal_pose(goal)``."""
+        agent.set_goal_pose(goal)
 
     def next_goal(self, agent: ControlledAgent, now: float) -> Pose | None:
         """A new point once the agent has stopped and waited."""
