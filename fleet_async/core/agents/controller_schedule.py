@@ -19,6 +19,7 @@ effect at its next wake; ``agent.set_controller`` re-reads it at once.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -143,8 +144,16 @@ class ControllerSchedule:
         if self._expected >= 0:
             self._expected = next_step
 
-    def run(self, engine: KinematicEngine, step: int, now: float, dt: float) -> None:
-        """Call the controllers due at step ``step`` (sim time ``now``)."""
+    def run(
+        self,
+        engine: KinematicEngine,
+        step: int,
+        now: float,
+        dt: float,
+        current: Callable[[Agent], object] | None = None,
+    ) -> None:
+        """Call the controllers due at step ``step`` (sim time ``now``); ``current`` gives an
+        agent's current action (the fleet's action queue; None: ask the agent)."""
         for agent in tuple(self._every.values()):
             agent.step_controllers(dt)
         if not self._woken:
@@ -157,21 +166,31 @@ class ControllerSchedule:
             return
         due = due[~engine.moving_mask(self._slots[due])]
         try:
-            self._call(engine, due, now, dt)
+            self._call(engine, due, now, dt, current)
         finally:  # the goals decided before a failure start, as one by one they would have
             self._send(engine)
 
-    def _call(self, engine: KinematicEngine, due: np.ndarray, now: float, dt: float) -> None:
+    def _call(
+        self,
+        engine: KinematicEngine,
+        due: np.ndarray,
+        now: float,
+        dt: float,
+        current: Callable[[Agent], object] | None,
+    ) -> None:
         agents, chains, wakes, lanes = self._agents, self._chains, self._wakes, self._lanes
+        slots = self._slots
+        masked = True  # no controller has run yet: due's mask says who moves
         for k in due.tolist():
             agent = agents[k]
             lane = lanes[k]
             if lane is not None and not self._stale:
-                # GoalController.compute, with the goal sent in one batch (_send)
+                # GoalController.compute, with the goal sent in one batch (_send); a lane's
+                # agent has the built-in get_current_action: the queue's current action
                 if (
                     lane.ready()
-                    and not engine.is_moving(agent.motion_slot)
-                    and agent.get_current_action() is None
+                    and (masked or not engine.is_moving(int(slots[k])))
+                    and (agent.get_current_action() if current is None else current(agent)) is None
                 ):
                     goal = lane.next_goal(agent, now)
                     if goal is not None:
@@ -183,6 +202,7 @@ class ControllerSchedule:
                 wakes[k] = -math.inf if wake is None else wake
                 continue
             self._send(engine)  # every goal before any other controller runs
+            masked = False  # it may set robots moving
             if self._stale:  # a controller changed a chain: read every chain afresh
                 agent.step_controllers(dt)
                 wake = _wake(agent)

@@ -199,7 +199,9 @@ class FleetMotion:
         self._dt = dt
         self.actions.tick(self._sim.sim_time, dt)
         if self._controlled:
-            self._controlled.run(self.engine, self._sim.step_count, self._sim.sim_time, dt)
+            self._controlled.run(
+                self.engine, self._sim.step_count, self._sim.sim_time, dt, self.actions.current
+            )
         if not self.engine.is_idle():  # an idle fleet's step costs no array work
             self.engine.advance(dt)
         step = self._sim.step_count
