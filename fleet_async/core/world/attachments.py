@@ -17,7 +17,6 @@ import numpy as np
 
 from fleet_async.core.geometry.pose import Pose
 from fleet_async.core.geometry.quaternions import (
-    compose_poses_batch,
     quat_multiply_batch,
     rotate_vectors_batch,
 )
@@ -70,6 +69,10 @@ class AttachmentSet(Generic[_B]):
         ) = None
         # Per plan level: whether a pass has placed every child of it since the plan was built.
         self._seen: list[bool] = []
+        # Per plan level, per child: whether it was composed, the parent orientation it was
+        # last composed at, and the offset and orientation that compose gave. A parent whose
+        # orientation kept its bits gives its children the same offset and orientation again.
+        self._frames: list[tuple[np.ndarray, ...]] = []
         # One child placed on its own (attach, set_pose of a carrier): the parent-frame offset
         # and orientation by (parent orientation, relative pose), as compose_poses_batch gives
         # them for one row. A fleet's carried objects mostly share both, and the batch
@@ -163,6 +166,15 @@ class AttachmentSet(Generic[_B]):
         if self._plan is None:
             self._plan = self._build_plan()
             self._seen = [False] * len(self._plan)
+            self._frames = [
+                (
+                    np.zeros(len(c), bool),
+                    np.zeros((len(c), 4)),
+                    np.zeros((len(c), 3)),
+                    np.zeros((len(c), 4)),
+                )
+                for _, c, _, _, _ in self._plan
+            ]
         for level, (parent_rows, child_rows, rel_pos, rel_orn, link_atts) in enumerate(self._plan):
             if len(child_rows):
                 self._follow_level(level, parent_rows, child_rows, rel_pos, rel_orn)
@@ -180,6 +192,7 @@ class AttachmentSet(Generic[_B]):
         rel_orn: np.ndarray,
     ) -> None:
         store = self._store
+        stale: np.ndarray | slice = slice(None)
         if not (self._seen[level] and self.incremental):
             self._seen[level] = True  # every child, this once
         else:
@@ -189,10 +202,22 @@ class AttachmentSet(Generic[_B]):
                 return
             parent_rows, child_rows = parent_rows[stale], child_rows[stale]
             rel_pos, rel_orn = rel_pos[stale], rel_orn[stale]
-        # Gathered rows are C-contiguous copies: a subset composes to the full pass's bits.
-        pos, orn = compose_poses_batch(
-            store.position[parent_rows], store.orientation[parent_rows], rel_pos, rel_orn
-        )
+        parent_pos, parent_orn = store.position[parent_rows], store.orientation[parent_rows]
+        known, at_orn, offsets, orns = self._frames[level]
+        if (
+            self.incremental
+            and known[stale].all()
+            and np.array_equal(parent_orn.view(np.uint64), at_orn[stale].view(np.uint64))
+        ):
+            # Every parent's orientation has the bits of its children's last compose: the same
+            # offsets and orientations (compose_poses_batch works row by row: a row's bits do
+            # not depend on the rows composed with it), added to where the parents are now.
+            pos, orn = parent_pos + offsets[stale], orns[stale]
+        else:
+            # Gathered rows are C-contiguous copies: a subset composes to the full pass's bits.
+            offset = rotate_vectors_batch(rel_pos, parent_orn)
+            pos, orn = parent_pos + offset, quat_multiply_batch(parent_orn, rel_orn)
+            known[stale], at_orn[stale], offsets[stale], orns[stale] = True, parent_orn, offset, orn
         self._write(child_rows, pos, orn)
 
     def place_child_only(self, att: Attachment[_B]) -> None:
