@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from fleet_async import Agent, MultiRobotSimulationCore, Pose, ShapeParams, SimObject
 from tests.conftest import headless_params
@@ -83,3 +84,45 @@ def test_only_written_rows_are_recomputed():
         assert not store.written[: store.high_water].any()
     finally:
         sim.close()
+
+
+def _carriers(incremental: bool, kernels: str) -> list[bytes]:
+    """60 carriers, differential and omni, turned at random, each with a tote on a turned
+    relative pose, driving seeded paths (turning and driving straight, some at once)."""
+    sim = MultiRobotSimulationCore(headless_params(enable_floor=False, kernels=kernels))
+    rng = np.random.default_rng(3)
+    body = ShapeParams("box", half_extents=[0.2, 0.15, 0.1])
+    tote = ShapeParams("box", half_extents=[0.1, 0.1, 0.05])
+    frames = []
+    with sim:
+        sim.attachments.incremental = incremental
+        robots = []
+        for i in range(60):
+            yaw = float(rng.uniform(-3, 3))
+            robot = Agent.from_mesh(
+                visual_shape=None,
+                collision_shape=body,
+                pose=Pose.from_euler(2.0 * (i % 8), 2.0 * (i // 8), 0.1, 0.0, 0.0, yaw),
+                sim_core=sim,
+                controller={"type": "differential" if i % 2 else "omni"},
+            )
+            box = SimObject.from_mesh(tote, tote, Pose.from_xyz(0, 0, 0.3), sim_core=sim)
+            robot.attach_object(box, relative_pose=Pose.from_euler(0.1, 0.05, 0.15, 0.1, 0, 0.4))
+            robots.append(robot)
+        for step in range(150):
+            if step % 25 == 0:
+                for robot in robots:
+                    x, y, _ = robot.get_pose().position.tolist()
+                    dx, dy = rng.uniform(-3, 3, 2)
+                    yaw = float(rng.uniform(-3, 3))
+                    robot.set_path([Pose.from_euler(x + dx, y + dy, 0.1, 0.0, 0.0, yaw)])
+            sim.step_once()
+            frames.append(sim.state.position.tobytes() + sim.state.orientation.tobytes())
+    return frames
+
+
+@pytest.mark.parametrize("kernels", ["numpy", "numba"])
+def test_turning_and_driving_carriers_give_the_full_pass_bits(kernels):
+    """Kept frames (a parent that kept its orientation's bits) and the compiled advance (which
+    must flag what it writes) against composing every child every step."""
+    assert _carriers(True, kernels) == _carriers(False, kernels)

@@ -203,21 +203,27 @@ class AttachmentSet(Generic[_B]):
             parent_rows, child_rows = parent_rows[stale], child_rows[stale]
             rel_pos, rel_orn = rel_pos[stale], rel_orn[stale]
         parent_pos, parent_orn = store.position[parent_rows], store.orientation[parent_rows]
-        known, at_orn, offsets, orns = self._frames[level]
-        if (
-            self.incremental
-            and known[stale].all()
-            and np.array_equal(parent_orn.view(np.uint64), at_orn[stale].view(np.uint64))
-        ):
-            # Every parent's orientation has the bits of its children's last compose: the same
-            # offsets and orientations (compose_poses_batch works row by row: a row's bits do
-            # not depend on the rows composed with it), added to where the parents are now.
-            pos, orn = parent_pos + offsets[stale], orns[stale]
-        else:
+        if not self.incremental:  # the reference: every child composed afresh
             # Gathered rows are C-contiguous copies: a subset composes to the full pass's bits.
             offset = rotate_vectors_batch(rel_pos, parent_orn)
-            pos, orn = parent_pos + offset, quat_multiply_batch(parent_orn, rel_orn)
-            known[stale], at_orn[stale], offsets[stale], orns[stale] = True, parent_orn, offset, orn
+            self._write(child_rows, parent_pos + offset, quat_multiply_batch(parent_orn, rel_orn))
+            return
+        # A child whose parent's orientation has the bits of its last compose gets the same
+        # offset and orientation (compose_poses_batch works row by row: a row's bits do not
+        # depend on the rows composed with it), added to where the parent is now; only the
+        # others are composed.
+        known, at_orn, offsets, orns = self._frames[level]
+        same = known[stale] & np.all(
+            parent_orn.view(np.uint64) == at_orn[stale].view(np.uint64), axis=1
+        )
+        if not same.all():
+            fresh = np.flatnonzero(~same)
+            at = fresh if isinstance(stale, slice) else stale[fresh]
+            turned = parent_orn[fresh]
+            known[at], at_orn[at] = True, turned
+            offsets[at] = rotate_vectors_batch(rel_pos[fresh], turned)
+            orns[at] = quat_multiply_batch(turned, rel_orn[fresh])
+        pos, orn = parent_pos + offsets[stale], orns[stale]
         self._write(child_rows, pos, orn)
 
     def place_child_only(self, att: Attachment[_B]) -> None:
