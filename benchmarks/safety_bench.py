@@ -32,6 +32,7 @@ from fleet_async import (
     ShapeParams,
     SimulationParams,
 )
+from fleet_async.core.base.compiled import KERNEL_MODES
 
 BOX = ShapeParams("box", half_extents=[0.3, 0.2, 0.2])
 WARMUP = 5
@@ -104,7 +105,7 @@ def main() -> None:
     parser.add_argument("--only", choices=("on", "off"), default=None)
     parser.add_argument(
         "--kernels",
-        choices=("numpy", "auto", "numba"),
+        choices=KERNEL_MODES,
         default="numpy",
         help="SimulationParams.kernels (default numpy, the simulation's default); numba "
         "kernels are compiled or loaded from their cache in the warm-up",
